@@ -1,0 +1,3 @@
+"""mvtk.damping (see DESIGN.md)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mvtk.io (see DESIGN.md)."""
+
+__all__: list[str] = []

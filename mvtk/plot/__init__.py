@@ -1,0 +1,3 @@
+"""mvtk.plot (see DESIGN.md)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mvtk.reduction (see DESIGN.md)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mvtk.report (see DESIGN.md)."""
+
+__all__: list[str] = []

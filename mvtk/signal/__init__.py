@@ -1,0 +1,3 @@
+"""mvtk.signal (see DESIGN.md)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mvtk.updating (see DESIGN.md)."""
+
+__all__: list[str] = []

@@ -1,0 +1,3 @@
+"""mvtk.validation (see DESIGN.md)."""
+
+__all__: list[str] = []
