@@ -5,7 +5,6 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import mvtk
 from mvtk.errors import DimensionError, FormatError, MvtkError, ParameterError
 from mvtk.fe import FEModel, eigsh_lowest
 
