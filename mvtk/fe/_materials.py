@@ -1,0 +1,135 @@
+"""Materials and plies: the shared vocabulary of sections, shells, beams and piezo patches.
+
+All values in SI: Pa, kg/m^3, m, C/N (d31), F/m (permittivity).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["IsotropicMaterial", "OrthotropicMaterial", "PiezoMaterial", "Ply"]
+
+
+def _positive(name: str, **values: float) -> None:
+    for key, v in values.items():
+        if not (np.isfinite(v) and v > 0):
+            raise ParameterError(f"material {name!r}: {key} must be a positive number, got {v!r}")
+
+
+@dataclass(frozen=True)
+class OrthotropicMaterial:
+    """Orthotropic (transversely isotropic or general) ply material in its own axes.
+
+    Parameters
+    ----------
+    name : str
+    E1, E2 : float
+        Young's moduli along and across the fibre (Pa).
+    G12, G13, G23 : float
+        Shear moduli (Pa); G13, G23 are the transverse shear moduli.
+    nu12 : float
+        Major Poisson ratio (nu21 = nu12 E2 / E1).
+    rho : float
+        Density (kg/m^3).
+    """
+
+    name: str
+    E1: float
+    E2: float
+    G12: float
+    G13: float
+    G23: float
+    nu12: float
+    rho: float
+
+    def __post_init__(self) -> None:
+        _positive(self.name, E1=self.E1, E2=self.E2, G12=self.G12, G13=self.G13,
+                  G23=self.G23, rho=self.rho)
+        if not (-1.0 < self.nu12 < np.sqrt(self.E1 / self.E2)):
+            raise ParameterError(
+                f"material {self.name!r}: nu12 = {self.nu12} violates positive definiteness "
+                f"(-1 < nu12 < sqrt(E1/E2) = {np.sqrt(self.E1 / self.E2):.4g})"
+            )
+
+    @property
+    def nu21(self) -> float:
+        return self.nu12 * self.E2 / self.E1
+
+    def plane_stress_q(self) -> np.ndarray:
+        """Reduced in-plane stiffness Q (3x3, Pa) in material axes (Voigt: 11, 22, 12)."""
+        d = 1.0 - self.nu12 * self.nu21
+        return np.array([
+            [self.E1 / d, self.nu12 * self.E2 / d, 0.0],
+            [self.nu12 * self.E2 / d, self.E2 / d, 0.0],
+            [0.0, 0.0, self.G12],
+        ])
+
+    def transverse_shear_q(self) -> np.ndarray:
+        """Transverse shear stiffness (2x2, Pa) in material axes (order 23, 13)."""
+        return np.diag([self.G23, self.G13])
+
+
+@dataclass(frozen=True)
+class IsotropicMaterial(OrthotropicMaterial):
+    """Isotropic material from E (Pa), nu and rho (kg/m^3)."""
+
+    def __init__(self, name: str, E: float, nu: float, rho: float):
+        if not (-1.0 < nu < 0.5):
+            raise ParameterError(f"material {name!r}: Poisson ratio must be in (-1, 0.5), got {nu}")
+        G = E / (2.0 * (1.0 + nu))
+        super().__init__(name=name, E1=E, E2=E, G12=G, G13=G, G23=G, nu12=nu, rho=rho)
+
+    @property
+    def E(self) -> float:
+        return self.E1
+
+    @property
+    def nu(self) -> float:
+        return self.nu12
+
+    @property
+    def G(self) -> float:
+        return self.G12
+
+
+@dataclass(frozen=True)
+class PiezoMaterial(IsotropicMaterial):
+    """Piezoceramic layer treated as an isotropic elastic solid plus a d31 actuation.
+
+    Parameters
+    ----------
+    name, E, nu, rho : see :class:`IsotropicMaterial` (E = 1/s11^E, Pa)
+    d31 : float
+        Piezoelectric charge constant (m/V = C/N), negative for PZT.
+    """
+
+    d31: float = 0.0
+
+    def __init__(self, name: str, E: float, nu: float, rho: float, d31: float):
+        super().__init__(name, E, nu, rho)
+        object.__setattr__(self, "d31", float(d31))
+
+
+@dataclass(frozen=True)
+class Ply:
+    """One layer of a laminate.
+
+    Parameters
+    ----------
+    material : OrthotropicMaterial
+    thickness : float
+        Ply thickness (m).
+    angle_deg : float
+        Orientation of material axis 1 from the element/global x axis (degrees).
+    """
+
+    material: OrthotropicMaterial
+    thickness: float
+    angle_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        _positive(self.material.name, thickness=self.thickness)
