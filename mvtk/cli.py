@@ -1,17 +1,45 @@
-"""The ``mvtk`` command line (sub-commands are added by each stage)."""
+"""The ``mvtk`` command line.
+
+Each stage contributes its sub-command from a private ``_cli`` module exposing
+``add_parser(subparsers)``:
+
+- ``mvtk modes STRUCTURE.toml``  (:mod:`mvtk.fe`)
+- ``mvtk update STUDY.toml``     (:mod:`mvtk.updating`)
+- ``mvtk reduce STUDY.toml``     (:mod:`mvtk.reduction`)
+- ``mvtk control STUDY.toml``    (:mod:`mvtk.control`)
+- ``mvtk run STUDY.toml --out DIR`` (:mod:`mvtk.study`)
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import importlib.util
 import sys
 
 from . import __version__
+from .errors import MvtkError
+
+#: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
+COMMAND_MODULES = (
+    "mvtk._run_cli",
+    "mvtk.fe._cli",
+    "mvtk.updating._cli",
+    "mvtk.reduction._cli",
+    "mvtk.control._cli",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="mvtk", description=__doc__)
+    parser = argparse.ArgumentParser(
+        prog="mvtk", description="mvtk: structural dynamics model validation"
+    )
     parser.add_argument("--version", action="version", version=f"mvtk {__version__}")
-    parser.add_subparsers(dest="command", metavar="COMMAND")
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name in COMMAND_MODULES:
+        if importlib.util.find_spec(name) is None:
+            continue
+        importlib.import_module(name).add_parser(subparsers)
     return parser
 
 
@@ -21,7 +49,11 @@ def main(argv: list[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    return int(args.func(args) or 0)
+    try:
+        return int(args.func(args) or 0)
+    except MvtkError as err:
+        print(f"mvtk {args.command}: error: {err}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover
