@@ -1,3 +1,19 @@
-"""mvtk.plot (see DESIGN.md)."""
+"""Figures (the only subpackage importing matplotlib, lazily, with figures built off pyplot)."""
 
-__all__: list[str] = []
+from ._figures import (
+    figure_to_png,
+    plot_decay,
+    plot_frf,
+    plot_mode_shapes,
+    plot_spectra,
+    plot_time_responses,
+)
+
+__all__ = [
+    "figure_to_png",
+    "plot_frf",
+    "plot_decay",
+    "plot_mode_shapes",
+    "plot_time_responses",
+    "plot_spectra",
+]

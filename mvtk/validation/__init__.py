@@ -1,3 +1,5 @@
-"""mvtk.validation (see DESIGN.md)."""
+"""Comparisons against references: pass/fail checks and error tables (pandas)."""
 
-__all__: list[str] = []
+from ._checks import Check, check_table, frequency_table
+
+__all__ = ["Check", "check_table", "frequency_table"]
