@@ -1,3 +1,33 @@
-"""mvtk.updating (see DESIGN.md)."""
+"""FE model updating against measured natural frequencies (and mode shapes).
 
-__all__: list[str] = []
+Parameters are numeric fields of a structure description addressed by dotted paths;
+targets are measured frequencies; :func:`update` runs a bounded, sensitivity-based
+least-squares fit and returns an :class:`UpdateResult` with the updated description and
+diagnostics (residuals, parameter changes and uncertainty, sensitivities,
+identifiability, unpaired modes).
+"""
+
+from ._pairing import Pairing, classify_modes, mac, pair_modes, target_mac
+from ._parameters import Parameter, get_path, set_path, with_values
+from ._sensitivity import Sensitivity, eigen_sensitivity
+from ._targets import FrequencyTarget, targets_from_modal_result
+from ._update import HistoryEntry, UpdateResult, update
+
+__all__ = [
+    "Parameter",
+    "get_path",
+    "set_path",
+    "with_values",
+    "FrequencyTarget",
+    "targets_from_modal_result",
+    "mac",
+    "classify_modes",
+    "pair_modes",
+    "target_mac",
+    "Pairing",
+    "eigen_sensitivity",
+    "Sensitivity",
+    "update",
+    "UpdateResult",
+    "HistoryEntry",
+]

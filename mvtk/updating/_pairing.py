@@ -1,0 +1,236 @@
+"""Pairing of measured targets with model modes: MAC, Hungarian assignment, mode types."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DimensionError, ParameterError
+from ..fe._model import DOF_NAMES, FEModel
+from ._targets import FrequencyTarget
+
+__all__ = ["mac", "classify_modes", "pair_modes", "Pairing"]
+
+
+def mac(phi_a: np.ndarray, phi_b: np.ndarray) -> np.ndarray:
+    """Modal assurance criterion between two sets of real shapes.
+
+    ``MAC_ij = (a_i . b_j)^2 / ((a_i . a_i)(b_j . b_j))`` (Allemang & Brown 1982).
+
+    Parameters
+    ----------
+    phi_a : ndarray, shape (n_sensors,) or (n_sensors, n_a)
+    phi_b : ndarray, shape (n_sensors,) or (n_sensors, n_b)
+
+    Returns
+    -------
+    ndarray, shape (n_a, n_b)
+        Values in [0, 1]; 0 where a shape is identically zero.
+    """
+    a = np.asarray(phi_a, dtype=float)
+    b = np.asarray(phi_b, dtype=float)
+    a = a[:, None] if a.ndim == 1 else a
+    b = b[:, None] if b.ndim == 1 else b
+    if a.ndim != 2 or b.ndim != 2 or a.shape[0] != b.shape[0]:
+        raise DimensionError(
+            f"MAC needs shapes over the same sensors, got {a.shape} and {b.shape}"
+        )
+    num = (a.T @ b) ** 2
+    den = np.outer(np.einsum("ij,ij->j", a, a), np.einsum("ij,ij->j", b, b))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+    return np.clip(out, 0.0, 1.0)
+
+
+def classify_modes(model: FEModel, vectors: np.ndarray) -> list[str]:
+    """Label each mode ``"bending"``, ``"torsion"``, ``"lateral"``, ``"axial"`` or ``"in-plane"``.
+
+    Rules (documented heuristics, assuming the structure's length along x, width along y
+    and thickness/out-of-plane direction z):
+
+    - Plate-like models (nodes spread in y): modes whose kinetic-energy share in uz is
+      below one half are ``"in-plane"``. Otherwise the uz shape is split into parts
+      symmetric and antisymmetric about the mid-width line ``y = (ymin + ymax)/2``
+      (each node paired with its mirror node); an antisymmetric energy fraction above
+      one half means ``"torsion"``, else ``"bending"``.
+    - Line models (beams along x): the DOF component with the largest kinetic-energy
+      share decides: uz or ry -> ``"bending"``, uy or rz -> ``"lateral"``, rx ->
+      ``"torsion"``, ux -> ``"axial"``.
+
+    Energy shares use ``phi_i (M phi)_i`` summed per component (mass-normalised shapes).
+
+    Parameters
+    ----------
+    model : FEModel
+    vectors : ndarray, shape (n_dof, n_modes)
+
+    Returns
+    -------
+    list of str
+    """
+    v = np.asarray(vectors, dtype=float)
+    if v.ndim == 1:
+        v = v[:, None]
+    if v.shape[0] != model.n_dof:
+        raise DimensionError(f"expected {model.n_dof} rows of mode shapes, got {v.shape[0]}")
+    energy = v * (model.M @ v)
+    share = np.zeros((6, v.shape[1]))
+    for c in range(6):
+        sel = model.dof_component == c
+        if sel.any():
+            share[c] = energy[sel].sum(axis=0)
+    share /= np.where(share.sum(axis=0) > 0, share.sum(axis=0), 1.0)
+    xyz = model.nodes
+    extent = np.ptp(xyz, axis=0) if len(xyz) else np.zeros(3)
+    plate = extent[1] > 1e-6 * max(extent[0], extent[1], 1e-300)
+    uz = model.dof_component == DOF_NAMES.index("uz")
+    if not plate or not uz.any():
+        names = {0: "axial", 1: "lateral", 2: "bending", 3: "torsion", 4: "bending",
+                 5: "lateral"}
+        return [names[int(np.argmax(share[:, j]))] for j in range(v.shape[1])]
+    from scipy.spatial import cKDTree
+
+    nodes_uz = model.dof_node[uz]
+    pts = xyz[nodes_uz]
+    ymid = 0.5 * (xyz[:, 1].min() + xyz[:, 1].max())
+    mirror = pts.copy()
+    mirror[:, 1] = 2 * ymid - mirror[:, 1]
+    tree = cKDTree(pts)
+    dist, partner = tree.query(mirror)
+    tol = 1e-6 * max(float(extent.max()), 1e-300)
+    ok = dist <= tol
+    labels = []
+    for j in range(v.shape[1]):
+        if share[2, j] < 0.5:
+            labels.append("in-plane")
+            continue
+        u = v[uz, j]
+        um = u[partner]
+        sym = 0.5 * (u + um)[ok]
+        anti = 0.5 * (u - um)[ok]
+        e_s, e_a = float(sym @ sym), float(anti @ anti)
+        labels.append("torsion" if e_a > e_s else "bending")
+    return labels
+
+
+@dataclass(frozen=True)
+class Pairing:
+    """Result of pairing targets with model modes.
+
+    Attributes
+    ----------
+    modes : ndarray of int, shape (n_targets,)
+        0-based model mode index paired with each target.
+    mac : ndarray, shape (n_targets,)
+        MAC of each pair (NaN for targets without a measured shape).
+    method : tuple of str
+        How each target was paired: ``"fixed"``, ``"mac"`` or ``"order"``.
+    """
+
+    modes: np.ndarray
+    mac: np.ndarray
+    method: tuple[str, ...]
+
+
+def _sensor_rows(model: FEModel, target: FrequencyTarget, i: int) -> np.ndarray:
+    try:
+        return np.array([model.dof_index(n, c) for n, c in target.sensors], dtype=np.int64)
+    except ParameterError as err:
+        raise ParameterError(f"target {target.label or i + 1}: sensor DOF: {err}") from err
+
+
+def target_mac(model: FEModel, vectors: np.ndarray, targets: Sequence[FrequencyTarget]):
+    """MAC of each shape-bearing target against every model mode, shape (n_targets, n_modes).
+
+    Rows of targets without a shape are NaN.
+    """
+    out = np.full((len(targets), vectors.shape[1]), np.nan)
+    for i, t in enumerate(targets):
+        if t.has_shape:
+            rows = _sensor_rows(model, t, i)
+            out[i] = mac(t.shape_values, vectors[rows])[0]
+    return out
+
+
+def pair_modes(
+    targets: Sequence[FrequencyTarget],
+    fn_hz: np.ndarray,
+    mac_matrix: np.ndarray | None = None,
+    kinds: Sequence[str] | None = None,
+) -> Pairing:
+    """Pair each target with a distinct model mode.
+
+    Order of rules: (1) targets with an explicit ``mode`` take that mode; (2) targets
+    with a measured shape are assigned one-to-one by the Hungarian algorithm
+    (:func:`scipy.optimize.linear_sum_assignment`) on ``1 - MAC`` among the remaining
+    modes; (3) the other targets, in ascending measured frequency, take the lowest
+    remaining mode, restricted to modes of the same ``kind`` when the target has a kind
+    and ``kinds`` (model mode labels) are given.
+
+    Parameters
+    ----------
+    targets : sequence of FrequencyTarget
+    fn_hz : ndarray, shape (n_modes,)
+        Model natural frequencies (ascending).
+    mac_matrix : ndarray, shape (n_targets, n_modes), optional
+        From :func:`target_mac`; required when targets carry shapes.
+    kinds : sequence of str, optional
+        Model mode labels (see :func:`classify_modes`).
+
+    Raises
+    ------
+    ParameterError
+        Not enough model modes, duplicated/out-of-range fixed modes, or no model mode of
+        a requested kind left.
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    n_t, n_m = len(targets), len(fn_hz)
+    if n_t > n_m:
+        raise ParameterError(f"{n_t} targets need at least as many model modes, got {n_m}")
+    modes = np.full(n_t, -1, dtype=np.int64)
+    method = [""] * n_t
+    used: set[int] = set()
+    for i, t in enumerate(targets):
+        if t.mode is not None:
+            m = t.mode - 1
+            if m >= n_m:
+                raise ParameterError(
+                    f"target {t.label or i + 1} asks for model mode {t.mode} but only "
+                    f"{n_m} modes are computed (raise n_modes)"
+                )
+            if m in used:
+                raise ParameterError(f"model mode {t.mode} is requested by two targets")
+            modes[i], method[i] = m, "fixed"
+            used.add(m)
+    shaped = [i for i, t in enumerate(targets) if modes[i] < 0 and t.has_shape]
+    if shaped:
+        if mac_matrix is None:
+            raise ParameterError("targets carry shapes but no MAC matrix was given")
+        free = [m for m in range(n_m) if m not in used]
+        cost = 1.0 - mac_matrix[np.ix_(shaped, free)]
+        rows, cols = linear_sum_assignment(cost)
+        for r, c in zip(rows, cols):
+            modes[shaped[r]], method[shaped[r]] = free[c], "mac"
+            used.add(free[c])
+    rest = sorted((i for i in range(n_t) if modes[i] < 0), key=lambda i: targets[i].fn_hz)
+    for i in rest:
+        t = targets[i]
+        want = t.kind if (t.kind is not None and kinds is not None) else None
+        cands = [m for m in range(n_m) if m not in used and (want is None or kinds[m] == want)]
+        if not cands:
+            found = "" if kinds is None else f"; model mode kinds: {list(kinds)}"
+            raise ParameterError(
+                f"target {t.label or i + 1} ({t.fn_hz:g} Hz"
+                f"{', ' + t.kind if t.kind else ''}) has no free model mode to pair with"
+                f"{found} (raise n_modes)"
+            )
+        modes[i], method[i] = cands[0], "order"
+        used.add(cands[0])
+    pm = np.full(n_t, np.nan)
+    if mac_matrix is not None:
+        has = ~np.isnan(mac_matrix[:, 0]) if n_m else np.zeros(n_t, bool)
+        pm[has] = mac_matrix[np.flatnonzero(has), modes[has]]
+    return Pairing(modes=modes, mac=pm, method=tuple(method))

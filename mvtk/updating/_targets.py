@@ -1,0 +1,223 @@
+"""Updating targets: measured natural frequencies with optional mode shapes."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError, DimensionError, ParameterError
+from ..fe._model import DOF_NAMES
+
+__all__ = ["FrequencyTarget", "targets_from_modal_result"]
+
+
+def _normalise_shape(shape: Any, where: str) -> tuple[tuple[tuple[int, str], ...], np.ndarray]:
+    """Sensors ((node, component), ...) and values from the accepted shape forms."""
+    if isinstance(shape, Mapping) and {"nodes", "components", "values"} <= set(shape):
+        nodes = list(shape["nodes"])
+        comps = shape["components"]
+        if isinstance(comps, str):
+            comps = [comps] * len(nodes)
+        comps = list(comps)
+        values = list(shape["values"])
+        if not len(nodes) == len(comps) == len(values):
+            raise DimensionError(
+                f"{where}: shape nodes, components and values must have equal lengths, "
+                f"got {len(nodes)}, {len(comps)}, {len(values)}"
+            )
+        items = list(zip(zip(nodes, comps), values))
+    elif isinstance(shape, Mapping):
+        items = list(shape.items())
+    else:
+        raise ParameterError(
+            f"{where}: shape must be a mapping {{(node, component): value}} or "
+            f"{{'nodes': [...], 'components': [...], 'values': [...]}}, got "
+            f"{type(shape).__name__}"
+        )
+    if len(items) < 2:
+        raise DimensionError(f"{where}: a mode shape needs at least 2 sensor values")
+    sensors = []
+    for key, _ in items:
+        try:
+            node, comp = key
+            node = int(node)
+        except (TypeError, ValueError):
+            raise ParameterError(
+                f"{where}: shape key must be (node, component), got {key!r}"
+            ) from None
+        if comp not in DOF_NAMES:
+            raise ParameterError(
+                f"{where}: unknown DOF component {comp!r}; expected one of {DOF_NAMES}"
+            )
+        sensors.append((node, str(comp)))
+    values = np.asarray([v for _, v in items], dtype=float)
+    if not np.all(np.isfinite(values)) or not np.any(values):
+        raise ParameterError(f"{where}: shape values must be finite and not all zero")
+    return tuple(sensors), values
+
+
+@dataclass(frozen=True, eq=False)
+class FrequencyTarget:
+    """A measured natural frequency the model must reach.
+
+    Parameters
+    ----------
+    fn_hz : float
+        Measured natural frequency in Hz.
+    weight : float
+        Weight of the relative residual ``(f_model - fn_hz) / fn_hz`` (default 1).
+    mode : int, optional
+        Force pairing with this model mode (1-based, ascending frequency).
+    label : str, optional
+        Name in tables (default ``"f{i}"``).
+    shape : mapping, optional
+        Measured mode shape at sensor DOFs, either ``{(node, "uz"): value, ...}`` or
+        ``{"nodes": [...], "components": [...] or "uz", "values": [...]}``. Real
+        (normal-mode) values; node numbers are model node indices. Used for MAC pairing
+        and the optional 1 - MAC residuals.
+    kind : str, optional
+        Mode type (``"bending"``, ``"torsion"``, ...) checked when pairing by order.
+
+    Attributes
+    ----------
+    sensors : tuple of (int, str)
+        Sensor DOFs of ``shape`` (empty without a shape).
+    shape_values : ndarray or None
+        Shape values in the order of ``sensors``.
+    """
+
+    fn_hz: float
+    weight: float = 1.0
+    mode: int | None = None
+    label: str | None = None
+    shape: Any = None
+    kind: str | None = None
+
+    def __post_init__(self) -> None:
+        where = f"target {self.label or self.fn_hz!r}"
+        f = self.fn_hz
+        if isinstance(f, bool) or not isinstance(f, int | float | np.floating | np.integer):
+            raise ParameterError(f"{where}: fn_hz must be a number in Hz, got {f!r}")
+        if not (math.isfinite(f) and f > 0):
+            raise ParameterError(f"{where}: fn_hz must be positive and finite, got {f!r}")
+        object.__setattr__(self, "fn_hz", float(f))
+        w = self.weight
+        if isinstance(w, bool) or not isinstance(w, int | float) or not (
+            math.isfinite(w) and w >= 0
+        ):
+            raise ParameterError(f"{where}: weight must be a finite number >= 0, got {w!r}")
+        object.__setattr__(self, "weight", float(w))
+        if self.mode is not None:
+            if isinstance(self.mode, bool) or int(self.mode) != self.mode or self.mode < 1:
+                raise ParameterError(
+                    f"{where}: mode must be a 1-based mode number, got {self.mode!r}"
+                )
+            object.__setattr__(self, "mode", int(self.mode))
+        if self.shape is not None:
+            sensors, values = _normalise_shape(self.shape, where)
+        else:
+            sensors, values = (), None
+        object.__setattr__(self, "sensors", sensors)
+        object.__setattr__(self, "shape_values", values)
+
+    @property
+    def has_shape(self) -> bool:
+        """True when a measured shape is attached."""
+        return self.shape_values is not None
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], where: str = "target") -> FrequencyTarget:
+        """Build from a TOML table ``{fn_hz=..., weight=..., mode=..., ...}``."""
+        if not isinstance(d, Mapping):
+            raise ConfigError(f"{where}: expected a table with an 'fn_hz' key, got {d!r}")
+        allowed = {"fn_hz", "weight", "mode", "label", "shape", "kind"}
+        unknown = set(d) - allowed
+        if unknown:
+            raise ConfigError(
+                f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(allowed)}"
+            )
+        if "fn_hz" not in d:
+            raise ConfigError(f"{where}: missing key 'fn_hz'")
+        try:
+            return cls(**dict(d))
+        except (ParameterError, DimensionError) as err:
+            raise ConfigError(f"{where}: {err}") from err
+
+    @classmethod
+    def from_modal_result(cls, result: Any, **kwargs: Any) -> list[FrequencyTarget]:
+        """Targets from a modal/damping result; see :func:`targets_from_modal_result`."""
+        return targets_from_modal_result(result, **kwargs)
+
+
+def _fn_values(result: Any) -> np.ndarray:
+    if hasattr(result, "columns") and "fn_hz" in getattr(result, "columns", ()):
+        return np.asarray(result["fn_hz"], dtype=float).ravel()
+    if isinstance(result, Mapping):
+        if "fn_hz" not in result:
+            raise ParameterError(
+                f"modal result mapping has no 'fn_hz' key; keys: {sorted(map(str, result))}"
+            )
+        return np.asarray(result["fn_hz"], dtype=float).ravel()
+    if hasattr(result, "fn_hz"):
+        return np.asarray(result.fn_hz, dtype=float).ravel()
+    if isinstance(result, Sequence) and not isinstance(result, str):
+        return np.concatenate([_fn_values(r) for r in result]) if result else np.array([])
+    if hasattr(result, "to_dataframe"):
+        return _fn_values(result.to_dataframe())
+    raise ParameterError(
+        f"cannot read natural frequencies from a {type(result).__name__}: expected an "
+        "object with an 'fn_hz' attribute, a table with an 'fn_hz' column, or a list of them"
+    )
+
+
+def targets_from_modal_result(
+    result: Any,
+    *,
+    select: Sequence[int] | None = None,
+    weights: Sequence[float] | None = None,
+    labels: Sequence[str] | None = None,
+) -> list[FrequencyTarget]:
+    """Frequency targets from an identified modal/damping result.
+
+    Parameters
+    ----------
+    result : object
+        Anything carrying natural frequencies in Hz: an object with an ``fn_hz``
+        attribute (scalar or array; e.g. a ``mvtk.damping`` result), a
+        ``pandas.DataFrame`` with an ``fn_hz`` column, a mapping with key ``"fn_hz"``,
+        an object with ``to_dataframe()``, or a list of any of these (one per mode).
+    select : sequence of int, optional
+        0-based positions of the frequencies to keep (default all).
+    weights, labels : sequence, optional
+        Per selected target.
+
+    Returns
+    -------
+    list of FrequencyTarget
+    """
+    fn = _fn_values(result)
+    if fn.size == 0:
+        raise ParameterError("modal result contains no natural frequency (fn_hz is empty)")
+    if select is not None:
+        idx = list(select)
+        bad = [i for i in idx if not -fn.size <= i < fn.size]
+        if bad:
+            raise ParameterError(
+                f"select positions {bad} out of range for {fn.size} identified frequencies"
+            )
+        fn = fn[idx]
+    for name, seq in (("weights", weights), ("labels", labels)):
+        if seq is not None and len(seq) != fn.size:
+            raise DimensionError(f"expected {fn.size} {name}, got {len(seq)}")
+    return [
+        FrequencyTarget(
+            float(f),
+            weight=1.0 if weights is None else float(weights[i]),
+            label=None if labels is None else labels[i],
+        )
+        for i, f in enumerate(fn)
+    ]

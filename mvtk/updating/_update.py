@@ -1,0 +1,789 @@
+"""Sensitivity-based FE model updating against measured natural frequencies."""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import AccuracyWarning, ConfigError, IdentifiabilityWarning, ParameterError
+from ..fe._model import FEModel
+from ..fe._solvers import eigsh_lowest
+from ._pairing import Pairing, classify_modes, pair_modes, target_mac
+from ._parameters import Parameter, with_values
+from ._sensitivity import check_model, d_omega2, same_dofs
+from ._targets import FrequencyTarget
+
+__all__ = ["update", "UpdateResult", "HistoryEntry"]
+
+TWO_PI = 2.0 * math.pi
+
+
+def _default_builder() -> Callable[[Mapping[str, Any]], FEModel]:
+    try:
+        from ..fe import build_model
+    except ImportError as err:
+        raise ConfigError(
+            "no model builder given and mvtk.fe.build_model is not available; pass "
+            "builder=callable(description) -> FEModel"
+        ) from err
+    return build_model
+
+
+@dataclass(frozen=True)
+class HistoryEntry:
+    """One model evaluation during the update.
+
+    Attributes
+    ----------
+    evaluation : int
+        1-based evaluation counter.
+    values : dict
+        Parameter path -> value (free and fixed).
+    cost : float
+        ``0.5 * sum(residual^2)`` including MAC and regularisation terms.
+    fn_hz : ndarray
+        Model frequencies paired with the targets (Hz).
+    modes : ndarray of int
+        1-based model modes paired with the targets.
+    """
+
+    evaluation: int
+    values: dict
+    cost: float
+    fn_hz: np.ndarray
+    modes: np.ndarray
+
+
+@dataclass
+class _State:
+    x: np.ndarray
+    model: FEModel
+    omega2: np.ndarray
+    vectors: np.ndarray
+    fn_all: np.ndarray
+    kinds: list[str] | None
+    mac_matrix: np.ndarray | None
+    pairing: Pairing
+    residual: np.ndarray
+    jac: np.ndarray | None = None
+    d_omega2: np.ndarray | None = None  # (n_targets, n_free) per physical unit
+
+
+class _Problem:
+    """Residuals and Jacobian in scaled variables x = p / scale."""
+
+    def __init__(self, description, params, targets, builder, n_modes, weights, mac_weight,
+                 regularization, mode_classifier, rel_step):
+        self.description = description
+        self.params = params
+        self.targets = targets
+        self.builder = builder
+        self.n_modes = n_modes
+        self.w = weights
+        self.mac_weight = mac_weight
+        self.reg = regularization
+        self.classifier = mode_classifier
+        self.rel_step = rel_step
+        resolved = [p.resolve(description) for p in params]
+        self.initial = np.array([v for v, _ in resolved])
+        self.scale = np.array([s for _, s in resolved])
+        self.free = np.array([not p.fixed for p in params], dtype=bool)
+        self.x0 = (self.initial / self.scale)[self.free]
+        self.ft = np.array([t.fn_hz for t in targets])
+        self.mac_rows = (
+            [i for i, t in enumerate(targets) if t.has_shape] if mac_weight > 0 else []
+        )
+        self.need_kinds = mode_classifier is not None or any(
+            t.kind is not None for t in targets
+        )
+        self.history: list[HistoryEntry] = []
+        self.swaps: list[dict] = []
+        self.timing = {"build_s": 0.0, "eigen_s": 0.0, "sensitivity_s": 0.0,
+                       "n_builds": 0, "n_eigen": 0, "n_jacobians": 0}
+        self.fd_params: set[str] = set()
+        self._cache: _State | None = None
+
+    # -------------------------------------------------------------- helpers
+    def values(self, x: np.ndarray) -> np.ndarray:
+        v = self.initial.copy()
+        v[self.free] = np.asarray(x, dtype=float) * self.scale[self.free]
+        return v
+
+    def describe(self, x: np.ndarray) -> dict:
+        return with_values(
+            self.description, {p.path: float(v) for p, v in zip(self.params, self.values(x))}
+        )
+
+    def build(self, desc) -> FEModel:
+        t0 = time.perf_counter()
+        model = check_model(self.builder(desc), "model builder")
+        self.timing["build_s"] += time.perf_counter() - t0
+        self.timing["n_builds"] += 1
+        return model
+
+    def eigen(self, model: FEModel):
+        n = min(self.n_modes, model.n_dof)
+        if n < len(self.targets):
+            raise ParameterError(
+                f"the model has {model.n_dof} DOFs, fewer than the {len(self.targets)} targets"
+            )
+        t0 = time.perf_counter()
+        eig = eigsh_lowest(model.K, model.M, n)
+        self.timing["eigen_s"] += time.perf_counter() - t0
+        self.timing["n_eigen"] += 1
+        return eig
+
+    def kinds_of(self, model, vectors):
+        if self.classifier is not None:
+            kinds = list(self.classifier(model, vectors))
+            if len(kinds) != vectors.shape[1]:
+                raise ParameterError(
+                    f"mode_classifier returned {len(kinds)} labels for {vectors.shape[1]} modes"
+                )
+            return kinds
+        return classify_modes(model, vectors)
+
+    # ------------------------------------------------------------- evaluate
+    def state(self, x: np.ndarray) -> _State:
+        x = np.asarray(x, dtype=float)
+        if self._cache is not None and np.array_equal(self._cache.x, x):
+            return self._cache
+        model = self.build(self.describe(x))
+        eig = self.eigen(model)
+        fn_all = np.sqrt(np.maximum(eig.omega2, 0.0)) / TWO_PI
+        kinds = self.kinds_of(model, eig.vectors) if self.need_kinds else None
+        has_shapes = any(t.has_shape for t in self.targets)
+        macm = target_mac(model, eig.vectors, self.targets) if has_shapes else None
+        pairing = pair_modes(self.targets, fn_all, macm, kinds)
+        fp = fn_all[pairing.modes]
+        r = [self.w * (fp - self.ft) / self.ft]
+        if self.mac_rows:
+            r.append(self.mac_weight * self.w[self.mac_rows] * (1.0 - pairing.mac[self.mac_rows]))
+        if self.reg > 0:
+            r.append(math.sqrt(self.reg) * (x - self.x0))
+        res = np.concatenate(r)
+        st = _State(x.copy(), model, eig.omega2, eig.vectors, fn_all, kinds, macm, pairing, res)
+        self._record(st)
+        self._cache = st
+        return st
+
+    def _record(self, st: _State) -> None:
+        modes = st.pairing.modes + 1
+        if self.history:
+            prev = self.history[-1].modes
+            for i, (a, b) in enumerate(zip(prev, modes)):
+                if a != b:
+                    self.swaps.append({
+                        "evaluation": len(self.history) + 1,
+                        "target": self.targets[i].label or f"f{i + 1}",
+                        "from_mode": int(a), "to_mode": int(b),
+                    })
+        self.history.append(HistoryEntry(
+            evaluation=len(self.history) + 1,
+            values={p.path: float(v) for p, v in zip(self.params, self.values(st.x))},
+            cost=float(0.5 * st.residual @ st.residual),
+            fn_hz=st.fn_all[st.pairing.modes].copy(),
+            modes=modes,
+        ))
+
+    def residual(self, x):
+        return self.state(x).residual
+
+    # ------------------------------------------------------------- jacobian
+    def jacobian(self, x) -> np.ndarray:
+        st = self.state(x)
+        if st.jac is not None:
+            return st.jac
+        t_start = time.perf_counter()
+        b0, e0 = self.timing["build_s"], self.timing["eigen_s"]
+        nt = len(self.targets)
+        free_idx = np.flatnonzero(self.free)
+        modes = st.pairing.modes
+        phi = st.vectors[:, modes]
+        w2 = st.omega2[modes]
+        fp = st.fn_all[modes]
+        dw2 = np.zeros((nt, free_idx.size))
+        dmac = np.zeros((len(self.mac_rows), free_idx.size))
+        base_vals = self.values(x)
+        base_desc = self.describe(x)
+        for k, j in enumerate(free_idx):
+            p = self.params[j]
+            h = self.rel_step * self.scale[j]
+            if base_vals[j] + h > p.upper:
+                h = -h
+            pert_desc = with_values(base_desc, {p.path: float(base_vals[j] + h)})
+            pert = self.build(pert_desc)
+            pert_eig = None
+            if same_dofs(st.model, pert):
+                dw2[:, k] = d_omega2(w2, phi, (pert.K - st.model.K) / h,
+                                     (pert.M - st.model.M) / h)
+            else:
+                # the mesh changed: finite differences of the eigenvalues, modes tracked
+                # by index (documented limitation)
+                self.fd_params.add(p.path)
+                pert_eig = self.eigen(pert)
+                dw2[:, k] = (pert_eig.omega2[modes] - w2) / h
+            if self.mac_rows:
+                if pert_eig is None:
+                    pert_eig = self.eigen(pert)
+                pm = target_mac(pert, pert_eig.vectors, self.targets)
+                for r, i in enumerate(self.mac_rows):
+                    # follow the paired mode: the perturbed mode most M-parallel to it
+                    if same_dofs(st.model, pert):
+                        ov = np.abs(phi[:, i] @ (pert.M @ pert_eig.vectors))
+                        m = int(np.argmax(ov))
+                    else:
+                        m = int(modes[i])
+                    dmac[r, k] = (pm[i, m] - st.pairing.mac[i]) / h
+        dfp = dw2 / (8 * math.pi**2 * fp[:, None])
+        scale = self.scale[free_idx][None, :]
+        rows = [(self.w / self.ft)[:, None] * dfp * scale]
+        if self.mac_rows:
+            rows.append(-self.mac_weight * self.w[self.mac_rows][:, None] * dmac * scale)
+        if self.reg > 0:
+            rows.append(math.sqrt(self.reg) * np.eye(free_idx.size))
+        st.jac = np.vstack(rows)
+        st.d_omega2 = dw2
+        self.timing["n_jacobians"] += 1
+        spent = time.perf_counter() - t_start
+        self.timing["sensitivity_s"] += spent - (self.timing["build_s"] - b0) - (
+            self.timing["eigen_s"] - e0
+        )
+        return st.jac
+
+
+@dataclass(frozen=True, eq=False)
+class UpdateResult:
+    """Outcome of :func:`update`.
+
+    Attributes
+    ----------
+    description : dict
+        Updated structure description (deep copy with the new parameter values).
+    initial_description : dict
+        Description at the initial parameter values.
+    model : FEModel
+        Model built from ``description``.
+    parameters, targets : tuple
+        As given.
+    initial_values, values : ndarray, shape (n_params,)
+        Parameter values before/after (SI units of each field).
+    std : ndarray, shape (n_params,)
+        Standard deviation of each updated value from the Jacobian covariance
+        (NaN for fixed parameters or when it cannot be estimated; inf along a
+        non-identifiable direction).
+    covariance : ndarray, shape (n_free, n_free)
+        Covariance of the free parameters in their physical units.
+    at_bound : ndarray of bool, shape (n_params,)
+    fn_hz_initial, fn_hz : ndarray, shape (n_targets,)
+        Paired model frequencies (Hz) before/after.
+    modes_initial, modes : ndarray of int, shape (n_targets,)
+        1-based paired model modes before/after.
+    mac_initial, mac : ndarray, shape (n_targets,)
+        MAC of the pairs (NaN without measured shapes).
+    pairing_method : tuple of str
+    model_fn_hz : ndarray
+        All computed model frequencies after updating (Hz).
+    model_kinds : tuple of str
+        Mode type of each computed mode (see :func:`classify_modes`).
+    sensitivity : ndarray, shape (n_targets, n_free)
+        Normalised sensitivities (p/f) df/dp at the solution.
+    singular_values : ndarray
+        Singular values of the weighted frequency Jacobian in scaled variables.
+    condition_number : float
+    identifiable : bool
+    null_directions : tuple of dict
+        For each non-identifiable direction, the parameter weights of the (scaled)
+        right singular vector.
+    history : tuple of HistoryEntry
+    swaps : tuple of dict
+        Pairing changes between consecutive evaluations.
+    success : bool
+    message : str
+    n_evaluations, n_jacobians : int
+    cost : float
+    timing : dict
+        Seconds spent in builds, eigen solves and sensitivity products.
+    meta : dict
+    """
+
+    description: dict
+    initial_description: dict
+    model: FEModel
+    parameters: tuple[Parameter, ...]
+    targets: tuple[FrequencyTarget, ...]
+    initial_values: np.ndarray
+    values: np.ndarray
+    std: np.ndarray
+    covariance: np.ndarray
+    at_bound: np.ndarray
+    fn_hz_initial: np.ndarray
+    fn_hz: np.ndarray
+    modes_initial: np.ndarray
+    modes: np.ndarray
+    mac_initial: np.ndarray
+    mac: np.ndarray
+    pairing_method: tuple[str, ...]
+    model_fn_hz: np.ndarray
+    model_kinds: tuple[str, ...]
+    sensitivity: np.ndarray
+    singular_values: np.ndarray
+    condition_number: float
+    identifiable: bool
+    null_directions: tuple[dict, ...]
+    history: tuple[HistoryEntry, ...]
+    swaps: tuple[dict, ...]
+    success: bool
+    message: str
+    n_evaluations: int
+    n_jacobians: int
+    cost: float
+    timing: dict
+    meta: dict = field(default_factory=dict)
+
+    # ----------------------------------------------------------------- tables
+    def _target_labels(self) -> list[str]:
+        return [t.label or f"f{i + 1}" for i, t in enumerate(self.targets)]
+
+    def residual_table(self):
+        """Targets vs initial and updated model frequencies (``pandas.DataFrame``)."""
+        import pandas as pd
+
+        ft = np.array([t.fn_hz for t in self.targets])
+        return pd.DataFrame(
+            {
+                "target_hz": ft,
+                "initial_hz": self.fn_hz_initial,
+                "updated_hz": self.fn_hz,
+                "initial_error_pct": 100 * (self.fn_hz_initial - ft) / ft,
+                "error_pct": 100 * (self.fn_hz - ft) / ft,
+                "mode": self.modes,
+                "mac": self.mac,
+                "pairing": list(self.pairing_method),
+                "kind": [self.model_kinds[m - 1] if self.model_kinds else None
+                         for m in self.modes],
+                "weight": [t.weight for t in self.targets],
+            },
+            index=pd.Index(self._target_labels(), name="target"),
+        )
+
+    def parameter_table(self):
+        """Initial and updated parameters, change %, bounds and std (``pandas.DataFrame``)."""
+        import pandas as pd
+
+        with np.errstate(divide="ignore", invalid="ignore"):
+            change = 100 * (self.values - self.initial_values) / np.abs(self.initial_values)
+            std_pct = 100 * self.std / np.abs(self.values)
+        return pd.DataFrame(
+            {
+                "initial": self.initial_values,
+                "updated": self.values,
+                "change_pct": change,
+                "std": self.std,
+                "std_pct": std_pct,
+                "lower": [p.lower for p in self.parameters],
+                "upper": [p.upper for p in self.parameters],
+                "at_bound": self.at_bound,
+                "fixed": [p.fixed for p in self.parameters],
+            },
+            index=pd.Index([p.name for p in self.parameters], name="parameter"),
+        )
+
+    def history_table(self):
+        """One row per model evaluation: cost, parameter values and paired frequencies."""
+        import pandas as pd
+
+        rows = []
+        labels = self._target_labels()
+        for h in self.history:
+            row = {"evaluation": h.evaluation, "cost": h.cost}
+            row.update(h.values)
+            row.update({f"{lab}_hz": f for lab, f in zip(labels, h.fn_hz)})
+            row.update({f"{lab}_mode": int(m) for lab, m in zip(labels, h.modes)})
+            rows.append(row)
+        return pd.DataFrame(rows).set_index("evaluation")
+
+    def sensitivity_table(self):
+        """Normalised sensitivities (p/f) df/dp, targets x free parameters."""
+        import pandas as pd
+
+        cols = [p.name for p in self.parameters if not p.fixed]
+        return pd.DataFrame(
+            self.sensitivity, index=pd.Index(self._target_labels(), name="target"),
+            columns=cols,
+        )
+
+    def unpaired_table(self):
+        """Updated model modes not paired with any target (the modes the test missed)."""
+        import pandas as pd
+
+        paired = set(int(m) for m in self.modes)
+        idx = [m for m in range(1, len(self.model_fn_hz) + 1) if m not in paired]
+        return pd.DataFrame(
+            {
+                "fn_hz": self.model_fn_hz[[m - 1 for m in idx]],
+                "kind": [self.model_kinds[m - 1] if self.model_kinds else None for m in idx],
+            },
+            index=pd.Index(idx, name="mode"),
+        )
+
+    @property
+    def unpaired_fn_hz(self) -> np.ndarray:
+        """Frequencies (Hz) of the computed model modes not paired with a target."""
+        return self.unpaired_table()["fn_hz"].to_numpy()
+
+    def to_dataframe(self, table: str = "residuals"):
+        """A result table: ``"residuals"``, ``"parameters"``, ``"history"``,
+        ``"sensitivity"`` or ``"unpaired"``."""
+        tables = {
+            "residuals": self.residual_table,
+            "parameters": self.parameter_table,
+            "history": self.history_table,
+            "sensitivity": self.sensitivity_table,
+            "unpaired": self.unpaired_table,
+        }
+        if table not in tables:
+            raise ParameterError(f"unknown table {table!r}; expected one of {sorted(tables)}")
+        return tables[table]()
+
+    def _repr_html_(self) -> str:
+        return self.residual_table()._repr_html_() + self.parameter_table()._repr_html_()
+
+    # ----------------------------------------------------------------- output
+    def to_toml(self) -> str:
+        """The updated structure description as TOML text (``tomli_w``)."""
+        import tomli_w
+
+        return tomli_w.dumps(self.description)
+
+    def write_toml(self, path: str | Path) -> Path:
+        """Write the updated structure description to ``path`` as TOML."""
+        path = Path(path)
+        path.write_text(self.to_toml(), encoding="utf-8")
+        return path
+
+    def to_dict(self) -> dict:
+        """JSON-serialisable summary (tables as lists of records, no model)."""
+
+        def clean(v):
+            if isinstance(v, float) and not math.isfinite(v):
+                return None if math.isnan(v) else ("inf" if v > 0 else "-inf")
+            if isinstance(v, np.generic):
+                return clean(v.item())
+            return v
+
+        def records(df):
+            df = df.reset_index()
+            return [{k: clean(v) for k, v in row.items()} for row in df.to_dict("records")]
+
+        return {
+            "success": bool(self.success),
+            "message": self.message,
+            "n_evaluations": int(self.n_evaluations),
+            "n_jacobians": int(self.n_jacobians),
+            "cost": clean(float(self.cost)),
+            "identifiable": bool(self.identifiable),
+            "condition_number": clean(float(self.condition_number)),
+            "singular_values": [clean(float(s)) for s in self.singular_values],
+            "null_directions": list(self.null_directions),
+            "residuals": records(self.residual_table()),
+            "parameters": records(self.parameter_table()),
+            "sensitivity": records(self.sensitivity_table()),
+            "unpaired_modes": records(self.unpaired_table()),
+            "swaps": list(self.swaps),
+            "timing": {k: clean(v) for k, v in self.timing.items()},
+            "updated_values": {p.path: float(v) for p, v in zip(self.parameters, self.values)},
+        }
+
+
+def _check_inputs(parameters, targets, weights, regularization, mac_weight, max_iter, n_modes):
+    params = [p if isinstance(p, Parameter) else Parameter(p) for p in parameters]
+    if not params:
+        raise ParameterError("update needs at least one parameter")
+    paths = [p.path for p in params]
+    dup = sorted({p for p in paths if paths.count(p) > 1})
+    if dup:
+        raise ParameterError(f"parameters listed twice: {dup}")
+    if all(p.fixed for p in params):
+        raise ParameterError("all parameters are fixed; nothing to update")
+    tg = []
+    for i, t in enumerate(targets):
+        if isinstance(t, FrequencyTarget):
+            tg.append(t)
+        elif isinstance(t, int | float) and not isinstance(t, bool):
+            tg.append(FrequencyTarget(float(t)))
+        else:
+            raise ParameterError(
+                f"target {i + 1}: expected a FrequencyTarget or a frequency in Hz, "
+                f"got {type(t).__name__}"
+            )
+    if not tg:
+        raise ParameterError("update needs at least one target frequency")
+    if weights is None:
+        w = np.array([t.weight for t in tg])
+    else:
+        w = np.asarray(weights, dtype=float).ravel()
+        if w.shape != (len(tg),):
+            raise ParameterError(f"expected {len(tg)} weights (one per target), got {w.size}")
+        if not np.all(np.isfinite(w)) or np.any(w < 0):
+            raise ParameterError(f"weights must be finite and >= 0, got {w.tolist()}")
+    if not np.any(w > 0):
+        raise ParameterError("all target weights are zero")
+    for name, v in (("regularization", regularization), ("mac_weight", mac_weight)):
+        if not (isinstance(v, int | float) and math.isfinite(v) and v >= 0):
+            raise ParameterError(f"{name} must be a finite number >= 0, got {v!r}")
+    if not (isinstance(max_iter, int) and max_iter >= 1):
+        raise ParameterError(f"max_iter must be a positive integer, got {max_iter!r}")
+    fixed_modes = [t.mode for t in tg if t.mode is not None]
+    need = max([len(tg), *fixed_modes])
+    if n_modes is None:
+        n_modes = max(need, len(tg) + 4, 2 * len(tg))
+    elif not (isinstance(n_modes, int) and n_modes >= need):
+        raise ParameterError(
+            f"n_modes must be an integer >= {need} (number of targets / highest fixed "
+            f"mode), got {n_modes!r}"
+        )
+    return params, tg, w, n_modes
+
+
+def update(
+    description: Mapping[str, Any],
+    parameters: Sequence[Parameter | str],
+    targets: Sequence[FrequencyTarget | float],
+    *,
+    builder: Callable[[Mapping[str, Any]], FEModel] | None = None,
+    n_modes: int | None = None,
+    weights: Sequence[float] | None = None,
+    regularization: float = 0.0,
+    mac_weight: float = 0.0,
+    max_iter: int = 50,
+    mode_classifier: Callable[[FEModel, np.ndarray], Sequence[str]] | None = None,
+    frequency_std: float | None = None,
+    identifiability_tol: float = 1e-3,
+    rel_step: float = 1e-6,
+    xtol: float = 1e-10,
+    ftol: float = 1e-12,
+) -> UpdateResult:
+    """Update parameters of a structure description so the model matches target frequencies.
+
+    Minimises, with bounds (:func:`scipy.optimize.least_squares`, trust-region
+    reflective), the residual vector
+
+    - ``w_i (f_i(p) - f_i^test) / f_i^test`` for every target (weighted relative
+      frequency errors, f_i the paired model mode),
+    - ``mac_weight * w_i * (1 - MAC_i)`` for targets with a measured shape (if
+      ``mac_weight > 0``),
+    - ``sqrt(regularization) * (x - x0)`` (Tikhonov towards the initial values),
+
+    in scaled variables ``x = p / scale``. Modes are re-paired at every evaluation (MAC +
+    Hungarian when shapes exist, else by order and mode type; see :func:`pair_modes`).
+    The Jacobian is analytic: ``d(omega^2)/dp = phi'(dK/dp - omega^2 dM/dp) phi`` with
+    ``dK/dp``, ``dM/dp`` forward differences of the assembled matrices (one extra build
+    per free parameter per iteration). MAC derivatives (only with ``mac_weight > 0``)
+    use one extra eigen solve per parameter. If a perturbed build changes the DOF map,
+    that parameter falls back to finite differences of the eigenvalues (modes tracked
+    by index).
+
+    Parameters
+    ----------
+    description : mapping
+        Structure description (nested dicts/lists, e.g. a parsed structure TOML).
+    parameters : sequence of Parameter or str
+        Fields to update (a str is ``Parameter(path)`` without bounds).
+    targets : sequence of FrequencyTarget or float
+        Measured natural frequencies (Hz).
+    builder : callable, optional
+        ``builder(description) -> FEModel``; default :func:`mvtk.fe.build_model`.
+    n_modes : int, optional
+        Model modes computed per evaluation (default ``max(2 n_t, n_t + 4)``).
+    weights : sequence of float, optional
+        Per-target weights overriding ``FrequencyTarget.weight``.
+    regularization : float
+        Tikhonov weight on ``x - x0`` (dimensionless, scaled variables).
+    mac_weight : float
+        Weight of the ``1 - MAC`` residuals (0: MAC only for pairing).
+    max_iter : int
+        Maximum number of residual evaluations (``max_nfev`` of least_squares).
+    mode_classifier : callable, optional
+        ``f(model, vectors) -> labels`` used for kind checks; default
+        :func:`classify_modes`.
+    frequency_std : float, optional
+        Known relative standard deviation of the measured frequencies (e.g. 0.002). If
+        None, the residual variance ``|r|^2 / (m - n)`` is used (needs more targets
+        than free parameters, else std is NaN).
+    identifiability_tol : float
+        Smallest accepted ratio ``s_min / s_max`` of the singular values of the
+        weighted frequency Jacobian (scaled variables); below it an
+        :class:`~mvtk.errors.IdentifiabilityWarning` is issued.
+    rel_step : float
+        Finite-difference step relative to each parameter's scale.
+    xtol, ftol : float
+        Stopping tolerances of least_squares.
+
+    Returns
+    -------
+    UpdateResult
+
+    Warns
+    -----
+    IdentifiabilityWarning
+        Fewer target rows than free parameters or a near-singular sensitivity matrix
+        (e.g. a modulus and a density together from frequencies alone).
+    AccuracyWarning
+        The solver stopped at ``max_iter`` evaluations.
+
+    Notes
+    -----
+    Eigenvalue derivative: Fox & Kapoor, AIAA J 6(12), 1968. The standard deviation of
+    the parameters uses the Gauss-Newton covariance
+    ``A^-1 J_d' Sigma J_d A^-1`` with ``A = J'J`` (data and regularisation rows) and
+    ``Sigma`` the residual covariance (Friswell & Mottershead, Finite Element Model
+    Updating in Structural Dynamics, 1995, ch. 7).
+    """
+    from scipy.optimize import least_squares
+
+    if not isinstance(description, Mapping):
+        raise ParameterError(
+            f"description must be a mapping (parsed structure TOML), got "
+            f"{type(description).__name__}"
+        )
+    params, tg, w, n_modes = _check_inputs(
+        parameters, targets, weights, regularization, mac_weight, max_iter, n_modes
+    )
+    if frequency_std is not None and not (
+        isinstance(frequency_std, int | float) and frequency_std > 0
+    ):
+        raise ParameterError(f"frequency_std must be a positive number, got {frequency_std!r}")
+    if builder is None:
+        builder = _default_builder()
+    prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),
+                    float(regularization), mode_classifier, rel_step)
+    free = prob.free
+    lb = np.array([p.lower for p in params])[free] / prob.scale[free]
+    ub = np.array([p.upper for p in params])[free] / prob.scale[free]
+    st0 = prob.state(prob.x0)
+    fn0, modes0, mac0 = st0.fn_all[st0.pairing.modes], st0.pairing.modes + 1, st0.pairing.mac
+    sol = least_squares(
+        prob.residual, prob.x0, jac=prob.jacobian, bounds=(lb, ub), method="trf",
+        x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12,
+    )
+    x = sol.x
+    st = prob.state(x)
+    J = prob.jacobian(x)
+    n_t, n_free = len(tg), int(free.sum())
+    n_data = n_t + len(prob.mac_rows)
+    Jd = J[:n_data]
+    Jf = J[:n_t]
+    # identifiability from the frequency rows (regularisation would mask it)
+    _, s, vt = np.linalg.svd(Jf)  # vt: (n_free, n_free)
+    s_full = np.zeros(n_free)
+    s_full[: s.size] = s
+    smax = float(s_full.max()) if s_full.size else 0.0
+    ratio = s_full / smax if smax > 0 else np.zeros_like(s_full)
+    weak = np.flatnonzero(ratio < identifiability_tol)
+    cond = float(smax / s_full.min()) if s_full.min() > 0 else math.inf
+    free_params = [p for p in params if not p.fixed]
+    null_dirs = []
+    if weak.size:
+        for k in weak:
+            v = vt[k]
+            null_dirs.append({p.path: round(float(c), 4) for p, c in zip(free_params, v)})
+        pretty = "; ".join(
+            " + ".join(f"{c:+.2f}*{pth}" for pth, c in d.items() if abs(c) > 1e-3)
+            for d in null_dirs
+        )
+        why = (
+            f"{n_t} target frequencies for {n_free} free parameters"
+            if n_t < n_free else f"condition number {cond:.3g}"
+        )
+        warnings.warn(
+            f"parameters cannot be separated by the targets ({why}); the frequencies do "
+            f"not change along the direction(s) (in p/scale) {pretty}. Fix one of them, add "
+            "targets (other modes, mode shapes) or use regularization",
+            IdentifiabilityWarning, stacklevel=2,
+        )
+    # covariance (scaled variables) -> physical units
+    A = J.T @ J
+    if frequency_std is not None:
+        sig = np.concatenate([(w * frequency_std) ** 2, np.zeros(len(prob.mac_rows))])
+    elif n_data > n_free:
+        r = st.residual[:n_data]
+        sig = np.full(n_data, float(r @ r) / (n_data - n_free))
+    else:
+        sig = np.full(n_data, np.nan)
+    Ainv = np.linalg.pinv(A)
+    cov_x = Ainv @ (Jd.T * sig) @ Jd @ Ainv
+    sc = prob.scale[free]
+    cov = cov_x * np.outer(sc, sc)
+    std_free = np.sqrt(np.abs(np.diag(cov)))
+    if weak.size and regularization == 0:
+        involved = np.zeros(n_free, dtype=bool)
+        for d in null_dirs:
+            involved |= np.abs(np.array(list(d.values()))) > 1e-3
+        std_free[involved] = math.inf
+    std = np.full(len(params), np.nan)
+    std[free] = std_free
+    values = prob.values(x)
+    at_bound = np.zeros(len(params), dtype=bool)
+    span = np.where(np.isfinite(ub - lb), ub - lb, np.abs(x) + 1.0)
+    at_bound[free] = (np.abs(x - lb) <= 1e-6 * span) | (np.abs(ub - x) <= 1e-6 * span)
+    if at_bound.any():
+        hit = [p.path for p, b in zip(params, at_bound) if b]
+        warnings.warn(
+            f"parameters {hit} ended on a bound; the match may rely on the bound, not the "
+            "data", AccuracyWarning, stacklevel=2,
+        )
+    if sol.status == 0:
+        warnings.warn(
+            f"model updating stopped after {sol.nfev} evaluations (max_iter={max_iter}) "
+            f"without meeting the tolerances; cost {sol.cost:.3g}",
+            AccuracyWarning, stacklevel=2,
+        )
+    fp = st.fn_all[st.pairing.modes]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dfp = st.d_omega2 / (8 * math.pi**2 * fp[:, None])
+        sens = dfp * values[free][None, :] / fp[:, None]
+    kinds = st.kinds if st.kinds is not None else prob.kinds_of(st.model, st.vectors)
+    return UpdateResult(
+        description=prob.describe(x),
+        initial_description=prob.describe(prob.x0),
+        model=st.model,
+        parameters=tuple(params),
+        targets=tuple(tg),
+        initial_values=prob.initial.copy(),
+        values=values,
+        std=std,
+        covariance=cov,
+        at_bound=at_bound,
+        fn_hz_initial=fn0,
+        fn_hz=fp,
+        modes_initial=modes0,
+        modes=st.pairing.modes + 1,
+        mac_initial=mac0,
+        mac=st.pairing.mac,
+        pairing_method=st.pairing.method,
+        model_fn_hz=st.fn_all,
+        model_kinds=tuple(kinds),
+        sensitivity=sens,
+        singular_values=s_full,
+        condition_number=cond,
+        identifiable=not weak.size,
+        null_directions=tuple(null_dirs),
+        history=tuple(prob.history),
+        swaps=tuple(prob.swaps),
+        success=bool(sol.status > 0),
+        message=str(sol.message),
+        n_evaluations=int(sol.nfev),
+        n_jacobians=int(prob.timing["n_jacobians"]),
+        cost=float(0.5 * st.residual @ st.residual),
+        timing=dict(prob.timing),
+        meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
+              "least_squares_status": int(sol.status)},
+    )
