@@ -1,8 +1,23 @@
 """Finite element modelling: sections, elements, meshes, assembly, solvers, piezo."""
 
+from ._assembly import assemble_element_matrices, assemble_shell_model
+from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._mesh import (
+    SUPPORT_TYPES,
+    Patch,
+    PlateMesh,
+    edge_dofs,
+    edge_tributary_lengths,
+    rectangular_plate_mesh,
+    support_components,
+)
+from ._modal import ModalResult, modal_analysis, mode_type, static_solve
 from ._model import DOF_NAMES, FEModel
+from ._plate import SpringSupport, plate_model
+from ._shell import DRILL_FACTOR, mitc4_matrices
 from ._solvers import EigenSolution, eigsh_lowest, factorize
+from ._structure import build_model, get_by_path, load_structure, set_by_path
 
 __all__ = [
     "DOF_NAMES",
@@ -14,4 +29,26 @@ __all__ = [
     "OrthotropicMaterial",
     "PiezoMaterial",
     "Ply",
+    "Laminate",
+    "DRILL_FACTOR",
+    "mitc4_matrices",
+    "Patch",
+    "PlateMesh",
+    "rectangular_plate_mesh",
+    "SUPPORT_TYPES",
+    "support_components",
+    "edge_dofs",
+    "edge_tributary_lengths",
+    "assemble_shell_model",
+    "assemble_element_matrices",
+    "SpringSupport",
+    "plate_model",
+    "ModalResult",
+    "modal_analysis",
+    "mode_type",
+    "static_solve",
+    "build_model",
+    "load_structure",
+    "get_by_path",
+    "set_by_path",
 ]

@@ -1,0 +1,307 @@
+"""Structured rectangular plate meshes with patches, named node sets and supports.
+
+The plate occupies ``0 <= x <= length``, ``0 <= y <= width`` in the x-y plane (z = 0 is
+the reference surface). Mesh lines always pass through the patch edges and through the
+named points, so patch edges and sensor points are nodes of the mesh.
+
+Node sets created by :func:`rectangular_plate_mesh`:
+
+- ``"x0"``, ``"x1"``, ``"y0"``, ``"y1"``: the plate edges (x = 0, x = length, y = 0,
+  y = width);
+- ``"patch:<name>:x0"``, ``"patch:<name>:x1"``, ``"patch:<name>:y0"``,
+  ``"patch:<name>:y1"``: the node lines on the four edges of each patch;
+  ``"patch:<name>"``: every node of the patch;
+- ``"<point name>"``: the single node at each named point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import ParameterError
+from ._model import DOF_NAMES
+
+__all__ = [
+    "Patch",
+    "PlateMesh",
+    "rectangular_plate_mesh",
+    "edge_dofs",
+    "SUPPORT_TYPES",
+    "support_components",
+    "edge_tributary_lengths",
+]
+
+#: Named support types and the DOF components they fix (``"tangential"`` is the rotation
+#: about the edge direction, fixed by a hard simple support).
+SUPPORT_TYPES: dict[str, tuple[str, ...]] = {
+    "clamped": ("ux", "uy", "uz", "rx", "ry", "rz"),
+    "simply_supported": ("ux", "uy", "uz", "tangential"),
+    "hinged": ("ux", "uy", "uz"),
+    "free": (),
+}
+
+_EDGES = ("x0", "x1", "y0", "y1")
+
+
+@dataclass(frozen=True)
+class Patch:
+    """A rectangular region of the plate carrying a different section.
+
+    Parameters
+    ----------
+    name : str
+    x0, x1, y0, y1 : float
+        Extent (m), ``0 <= x0 < x1 <= length`` and ``0 <= y0 < y1 <= width``.
+    """
+
+    name: str
+    x0: float
+    x1: float
+    y0: float
+    y1: float
+
+
+@dataclass(frozen=True, eq=False)
+class PlateMesh:
+    """A structured quadrilateral mesh of a rectangular plate.
+
+    Attributes
+    ----------
+    nodes : ndarray (n_nodes, 3)
+        Coordinates (m), z = 0.
+    elements : ndarray (n_el, 4)
+        Counter-clockwise node indices.
+    element_region : ndarray (n_el,)
+        0 for the base plate, ``i + 1`` for elements inside ``patches[i]``.
+    x_lines, y_lines : ndarray
+        Mesh line coordinates (m).
+    patches : tuple of Patch
+    node_sets : dict of str to ndarray
+    """
+
+    nodes: np.ndarray
+    elements: np.ndarray
+    element_region: np.ndarray
+    x_lines: np.ndarray
+    y_lines: np.ndarray
+    patches: tuple[Patch, ...] = ()
+    node_sets: Mapping[str, np.ndarray] = field(default_factory=dict)
+
+    @property
+    def length(self) -> float:
+        return float(self.x_lines[-1])
+
+    @property
+    def width(self) -> float:
+        return float(self.y_lines[-1])
+
+
+def _lines(extent: float, breaks: Iterable[float], n_total: int | None,
+           size: float | None) -> np.ndarray:
+    pts = np.unique(np.concatenate([[0.0, extent], np.asarray(list(breaks), dtype=float)]))
+    # merge breakpoints closer than a tiny tolerance
+    keep = np.concatenate([[True], np.diff(pts) > 1e-9 * extent])
+    pts = pts[keep]
+    pts[-1] = extent
+    out = [np.array([0.0])]
+    for a, b in zip(pts[:-1], pts[1:]):
+        if n_total is not None:
+            n = max(1, int(round(n_total * (b - a) / extent)))
+        else:
+            n = max(1, int(np.ceil((b - a) / size - 1e-9)))
+        out.append(a + (b - a) * np.arange(1, n + 1) / n)
+    lines = np.concatenate(out)
+    lines[-1] = extent
+    return lines
+
+
+def _positive_int(name: str, value) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ParameterError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def rectangular_plate_mesh(
+    length: float,
+    width: float,
+    nx: int | None = None,
+    ny: int | None = None,
+    element_size: float | None = None,
+    patches: Sequence[Patch] = (),
+    points: Mapping[str, tuple[float, float]] | None = None,
+) -> PlateMesh:
+    """Mesh a rectangular plate with 4-node quadrilaterals.
+
+    Parameters
+    ----------
+    length, width : float
+        Plate size along x and y (m).
+    nx, ny : int, optional
+        Approximate number of elements along x and y (the intervals between patch edges
+        and points get a share proportional to their length, at least one element).
+    element_size : float, optional
+        Target element size (m), used when ``nx``/``ny`` are not given.
+    patches : sequence of Patch
+        Non-overlapping rectangular regions; mesh lines follow their edges.
+    points : mapping of name to (x, y), optional
+        Named points (m); mesh lines pass through them and each becomes a node set.
+
+    Returns
+    -------
+    PlateMesh
+
+    Raises
+    ------
+    ParameterError
+        For non-positive sizes, missing mesh density, patches outside the plate or
+        overlapping, points outside the plate.
+    """
+    for key, v in (("length", length), ("width", width)):
+        if not (isinstance(v, (int, float, np.floating)) and np.isfinite(v) and v > 0):
+            raise ParameterError(f"plate {key} must be a positive number (m), got {v!r}")
+    length, width = float(length), float(width)
+    if nx is None and ny is None and element_size is None:
+        raise ParameterError("mesh density missing: give nx and ny, or element_size")
+    if element_size is not None and not (np.isfinite(element_size) and element_size > 0):
+        raise ParameterError(f"element_size must be a positive number (m), got {element_size!r}")
+    if (nx is None) != (ny is None):
+        if element_size is None:
+            raise ParameterError("give both nx and ny (or element_size)")
+    if nx is not None:
+        nx = _positive_int("nx", nx)
+    if ny is not None:
+        ny = _positive_int("ny", ny)
+    patches = tuple(patches)
+    points = dict(points or {})
+    names = set()
+    for p in patches:
+        if p.name in names:
+            raise ParameterError(f"duplicated patch name {p.name!r}")
+        names.add(p.name)
+        if not (0 <= p.x0 < p.x1 <= length and 0 <= p.y0 < p.y1 <= width):
+            raise ParameterError(
+                f"patch {p.name!r} extent x {p.x0}..{p.x1}, y {p.y0}..{p.y1} must satisfy "
+                f"0 <= x0 < x1 <= {length} and 0 <= y0 < y1 <= {width}"
+            )
+    for i, p in enumerate(patches):
+        for q in patches[i + 1:]:
+            if p.x0 < q.x1 and q.x0 < p.x1 and p.y0 < q.y1 and q.y0 < p.y1:
+                raise ParameterError(f"patches {p.name!r} and {q.name!r} overlap")
+    for name, (x, y) in points.items():
+        if not (0 <= x <= length and 0 <= y <= width):
+            raise ParameterError(
+                f"point {name!r} at ({x}, {y}) is outside the plate 0..{length} x 0..{width}"
+            )
+    xb = [v for p in patches for v in (p.x0, p.x1)] + [x for x, _ in points.values()]
+    yb = [v for p in patches for v in (p.y0, p.y1)] + [y for _, y in points.values()]
+    xl = _lines(length, xb, nx, element_size)
+    yl = _lines(width, yb, ny, element_size)
+    nxl, nyl = len(xl), len(yl)
+    X, Y = np.meshgrid(xl, yl, indexing="ij")  # node (i, j) -> i * nyl + j
+    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    i, j = np.meshgrid(np.arange(nxl - 1), np.arange(nyl - 1), indexing="ij")
+    i, j = i.ravel(), j.ravel()
+    n00 = i * nyl + j
+    elements = np.column_stack([n00, n00 + nyl, n00 + nyl + 1, n00 + 1])
+    xc = 0.5 * (xl[i] + xl[i + 1])
+    yc = 0.5 * (yl[j] + yl[j + 1])
+    region = np.zeros(len(elements), dtype=np.int64)
+    tol_x, tol_y = 1e-9 * length, 1e-9 * width
+    sets: dict[str, np.ndarray] = {
+        "x0": np.flatnonzero(np.abs(nodes[:, 0]) <= tol_x),
+        "x1": np.flatnonzero(np.abs(nodes[:, 0] - length) <= tol_x),
+        "y0": np.flatnonzero(np.abs(nodes[:, 1]) <= tol_y),
+        "y1": np.flatnonzero(np.abs(nodes[:, 1] - width) <= tol_y),
+    }
+    x, y = nodes[:, 0], nodes[:, 1]
+    for k, p in enumerate(patches):
+        inside = (xc > p.x0) & (xc < p.x1) & (yc > p.y0) & (yc < p.y1)
+        region[inside] = k + 1
+        in_x = (x >= p.x0 - tol_x) & (x <= p.x1 + tol_x)
+        in_y = (y >= p.y0 - tol_y) & (y <= p.y1 + tol_y)
+        pre = f"patch:{p.name}"
+        sets[pre] = np.flatnonzero(in_x & in_y)
+        sets[f"{pre}:x0"] = np.flatnonzero(in_y & (np.abs(x - p.x0) <= tol_x))
+        sets[f"{pre}:x1"] = np.flatnonzero(in_y & (np.abs(x - p.x1) <= tol_x))
+        sets[f"{pre}:y0"] = np.flatnonzero(in_x & (np.abs(y - p.y0) <= tol_y))
+        sets[f"{pre}:y1"] = np.flatnonzero(in_x & (np.abs(y - p.y1) <= tol_y))
+    for name, (px, py) in points.items():
+        if name in sets:
+            raise ParameterError(f"point name {name!r} clashes with a node set of the mesh")
+        d = np.hypot(x - px, y - py)
+        sets[name] = np.array([int(np.argmin(d))])
+    return PlateMesh(nodes=nodes, elements=elements, element_region=region, x_lines=xl,
+                     y_lines=yl, patches=patches, node_sets=sets)
+
+
+def support_components(kind: str | Sequence[str], edge: str) -> tuple[int, ...]:
+    """DOF component indices fixed by a support ``kind`` on ``edge``.
+
+    ``kind`` is one of :data:`SUPPORT_TYPES` or an explicit list of DOF names
+    (``["uz", "rx"]``). ``"tangential"`` is the rotation that carries the slope along
+    the edge (see Notes).
+
+    Notes
+    -----
+    On an edge x = const (runs along y) the slope along the edge is ``dw/dy``, tied to
+    ``beta_y = -rx``; a hard simple support fixes ``rx`` there. On y = const it fixes
+    ``ry``.
+    """
+    if isinstance(kind, str):
+        if kind not in SUPPORT_TYPES:
+            raise ParameterError(
+                f"unknown support type {kind!r} on edge {edge!r}; expected one of "
+                f"{sorted(SUPPORT_TYPES)} or a list of DOF names {DOF_NAMES}"
+            )
+        names = SUPPORT_TYPES[kind]
+    else:
+        names = tuple(kind)
+    out = []
+    for n in names:
+        if n == "tangential":
+            out.append(DOF_NAMES.index("rx" if edge in ("x0", "x1") else "ry"))
+        elif n in DOF_NAMES:
+            out.append(DOF_NAMES.index(n))
+        else:
+            raise ParameterError(
+                f"unknown DOF name {n!r} in support of edge {edge!r}; expected {DOF_NAMES}"
+            )
+    return tuple(sorted(set(out)))
+
+
+def edge_dofs(mesh: PlateMesh, edge: str, kind: str | Sequence[str]) -> np.ndarray:
+    """Global (all-DOF) indices ``node * 6 + component`` fixed by a support on an edge."""
+    if edge not in mesh.node_sets:
+        raise ParameterError(
+            f"unknown edge or node set {edge!r}; available: {sorted(mesh.node_sets)}"
+        )
+    comps = support_components(kind, edge)
+    nodes = mesh.node_sets[edge]
+    return (nodes[:, None] * 6 + np.asarray(comps, dtype=np.int64)[None, :]).ravel()
+
+
+def edge_tributary_lengths(mesh: PlateMesh, node_set: str) -> np.ndarray:
+    """Length (m) of edge attributed to each node of a straight node line.
+
+    Used to turn a stiffness per unit length (e.g. a clamp rotational stiffness in
+    N m/rad per m) into nodal springs; the trapezoidal rule, exact for a constant
+    distribution.
+    """
+    nodes = mesh.node_sets[node_set]
+    xy = mesh.nodes[nodes, :2]
+    if len(nodes) == 1:
+        return np.zeros(1)
+    span = np.ptp(xy, axis=0)
+    axis = int(np.argmax(span))
+    order = np.argsort(xy[:, axis])
+    s = xy[order, axis]
+    seg = np.diff(s)
+    trib = np.zeros(len(s))
+    trib[:-1] += seg / 2
+    trib[1:] += seg / 2
+    out = np.empty_like(trib)
+    out[order] = trib
+    return out

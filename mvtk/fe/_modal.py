@@ -1,0 +1,177 @@
+"""Modal analysis and static solution of an :class:`FEModel`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import DimensionError, ParameterError
+from ._model import FEModel
+from ._solvers import eigsh_lowest, factorize
+
+__all__ = ["ModalResult", "modal_analysis", "static_solve", "mode_type"]
+
+
+@dataclass(frozen=True, eq=False)
+class ModalResult:
+    """Lowest modes of a structure.
+
+    Attributes
+    ----------
+    fn_hz : ndarray (n,)
+        Natural frequencies (Hz), ascending; rigid-body modes are reported as 0.
+    omega2 : ndarray (n,)
+        Eigenvalues (rad/s)^2 as solved (rigid-body modes are round-off near 0).
+    shapes : ndarray (n_dof, n)
+        Mass-normalised mode shapes over the model's free DOFs (``phi' M phi = I``).
+    rigid : ndarray of bool (n,)
+        True for rigid-body modes.
+    mode_type : tuple of str
+        ``"rigid"``, ``"bending"``, ``"torsion"`` or ``"in-plane"`` (see
+        :func:`mode_type`).
+    """
+
+    fn_hz: np.ndarray
+    omega2: np.ndarray
+    shapes: np.ndarray
+    rigid: np.ndarray
+    mode_type: tuple[str, ...]
+
+    @property
+    def n_modes(self) -> int:
+        return len(self.fn_hz)
+
+    def to_dataframe(self):
+        """One row per mode: ``mode`` (1-based), ``fn_hz``, ``mode_type``, ``rigid``."""
+        import pandas as pd
+
+        return pd.DataFrame({
+            "mode": np.arange(1, self.n_modes + 1),
+            "fn_hz": self.fn_hz,
+            "mode_type": list(self.mode_type),
+            "rigid": self.rigid,
+        })
+
+    def _repr_html_(self) -> str:
+        return self.to_dataframe().to_html(index=False)
+
+
+def _mirror_map(nodes: np.ndarray) -> np.ndarray | None:
+    """Index of each node's mirror image about the plane y = mid-width (None if absent)."""
+    y = nodes[:, 1]
+    mid = 0.5 * (y.min() + y.max())
+    scale = max(float(np.ptp(nodes[:, :2])), 1e-300)
+    key = np.round(nodes[:, :2] / (1e-7 * scale)).astype(np.int64)
+    mkey = np.round(np.column_stack([nodes[:, 0], 2 * mid - y]) / (1e-7 * scale)).astype(
+        np.int64)
+    lookup = {tuple(k): i for i, k in enumerate(key)}
+    out = np.empty(len(nodes), dtype=np.int64)
+    for i, k in enumerate(mkey):
+        j = lookup.get(tuple(k))
+        if j is None:
+            return None
+        out[i] = j
+    return out
+
+
+def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = None) -> str:
+    """Label an elastic mode shape of a plate-like model lying in the x-y plane.
+
+    ``"in-plane"`` when the in-plane translations (ux, uy) carry more of the shape's
+    translational norm than uz; otherwise ``"torsion"`` when the uz field is mainly
+    antisymmetric about the mid-width line y = (y_min + y_max)/2 (a strip along x
+    twisting), else ``"bending"``. For meshes without a mirror-symmetric node layout the
+    out-of-plane label is ``"bending"``. A heuristic for strips and plates clamped on an
+    x edge; it does not distinguish bending directions.
+    """
+    u = model.expand(np.asarray(shape, dtype=float))
+    inplane = float(np.sum(u[:, 0] ** 2 + u[:, 1] ** 2))
+    outplane = float(np.sum(u[:, 2] ** 2))
+    if inplane > outplane:
+        return "in-plane"
+    if mirror is None:
+        mirror = _mirror_map(model.nodes)
+    if mirror is None:
+        return "bending"
+    w = u[:, 2]
+    anti = float(np.sum((w - w[mirror]) ** 2))
+    sym = float(np.sum((w + w[mirror]) ** 2))
+    return "torsion" if anti > sym else "bending"
+
+
+def modal_analysis(
+    model: FEModel, n_modes: int = 6, sigma: float | None = None, rigid_tol_hz: float | None = None
+) -> ModalResult:
+    """Lowest ``n_modes`` modes by shift-invert Lanczos (:func:`mvtk.fe.eigsh_lowest`).
+
+    Parameters
+    ----------
+    model : FEModel
+    n_modes : int
+        Number of modes (1 <= n_modes < n_dof).
+    sigma : float, optional
+        Shift in (rad/s)^2; default a small negative shift, so free-free structures work.
+    rigid_tol_hz : float, optional
+        Modes below this frequency are rigid-body modes. Default: ``1e-4`` times the
+        first clearly elastic frequency scale, i.e. ``|omega2| < 1e-8 * max(omega2)``
+        with at least ``1e-3`` Hz.
+
+    Returns
+    -------
+    ModalResult
+    """
+    if not isinstance(model, FEModel):
+        raise ParameterError(f"model must be an FEModel, got {type(model).__name__}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)):
+        raise ParameterError(f"n_modes must be an integer, got {n_modes!r}")
+    if not 1 <= n_modes < model.n_dof:
+        raise ParameterError(f"n_modes must be in 1..{model.n_dof - 1}, got {n_modes}")
+    sol = eigsh_lowest(model.K, model.M, int(n_modes), sigma=sigma)
+    w2 = sol.omega2
+    if rigid_tol_hz is None:
+        scale = float(np.max(np.abs(w2))) if w2.size else 0.0
+        thresh = max(1e-8 * scale, (2 * np.pi * 1e-3) ** 2)
+    else:
+        thresh = (2 * np.pi * float(rigid_tol_hz)) ** 2
+    rigid = np.abs(w2) < thresh
+    fn = np.where(rigid, 0.0, np.sqrt(np.abs(w2)) / (2 * np.pi))
+    mirror = _mirror_map(model.nodes)
+    labels = tuple(
+        "rigid" if r else mode_type(model, sol.vectors[:, i], mirror)
+        for i, r in enumerate(rigid)
+    )
+    return ModalResult(fn_hz=fn, omega2=w2, shapes=sol.vectors, rigid=rigid, mode_type=labels)
+
+
+def static_solve(model: FEModel, f: np.ndarray) -> np.ndarray:
+    """Static displacement ``K^-1 f`` over the free DOFs.
+
+    Parameters
+    ----------
+    model : FEModel
+    f : ndarray (n_dof,) or (n_dof, k)
+        Load vector(s) in N and N m over the free DOFs.
+
+    Returns
+    -------
+    ndarray, same shape as ``f``
+        Displacements (m) and rotations (rad).
+
+    Raises
+    ------
+    DimensionError
+        If ``f`` does not have ``n_dof`` rows.
+    ParameterError
+        If K is singular (under-constrained structure).
+    """
+    f = np.asarray(f, dtype=float)
+    if f.ndim not in (1, 2) or f.shape[0] != model.n_dof:
+        raise DimensionError(
+            f"load must have shape ({model.n_dof},) or ({model.n_dof}, k), got {f.shape}"
+        )
+    lu = factorize(model.K)
+    x = lu.solve(f)
+    if not np.all(np.isfinite(x)):
+        raise ParameterError("static solution is not finite: is the structure constrained?")
+    return x

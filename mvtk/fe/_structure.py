@@ -1,0 +1,341 @@
+'''Structure descriptions (TOML or dict) and :func:`build_model`.
+
+Schema
+------
+All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example::
+
+    name = "smart beam"                   # optional
+
+    [materials.steel]                     # isotropic: E, nu, rho
+    E = 210e9
+    nu = 0.3
+    rho = 7900
+
+    [materials.cfrp]                      # orthotropic: E1, E2, G12, G13, G23, nu12, rho
+    E1 = 140e9
+    E2 = 10e9
+    G12 = 5e9
+    G13 = 5e9
+    G23 = 3.5e9
+    nu12 = 0.3
+    rho = 1600
+
+    [materials.pic151]                    # piezo: E, nu, rho, d31 (m/V)
+    E = 66.667e9
+    nu = 0.34
+    rho = 7800
+    d31 = -210e-12
+
+    [structure]
+    type = "plate"                        # "plate" (MITC4 shells)
+    length = 0.18                         # along x (m)
+    width = 0.133                         # along y (m)
+    shear_correction = 0.8333333          # optional, default 5/6
+
+    [[structure.layers]]                  # base laminate, bottom to top; its mid-plane
+    material = "steel"                    # is the reference surface
+    thickness = 0.5e-3
+    angle = 0.0                           # optional, degrees
+
+    [[patches]]                           # optional; layers bonded on top of the base
+    name = "pzt"
+    x0 = 0.005
+    x1 = 0.055
+    y0 = 0.04
+    y1 = 0.09
+    layers = [{ material = "epoxy", thickness = 36e-6 },
+              { material = "pic151", thickness = 0.25e-3 }]
+
+    [mesh]                                # nx and ny, or element_size (m)
+    nx = 36
+    ny = 26
+
+    [boundary]
+    clamp = "x0"                          # clamped edge (x0, x1, y0 or y1), optional
+    clamp_stiffness = 5e3                 # optional: elastic clamp rotation, N m/rad per m
+    clamp_translational_stiffness = 1e8   # optional: elastic clamp uz, N/m per m
+    edges = { y0 = "free" }               # optional: clamped, simply_supported, hinged,
+                                          # free, or a list of DOF names ["uz", "rx"]
+
+    [[boundary.springs]]                  # optional grounded springs
+    node_set = "tip"                      # any node set (edges, patch edges, points)
+    dof = "uz"
+    k = 100.0                             # N/m (or N m/rad) per node ...
+    per_length = false                    # ... or per metre of edge when true
+
+    [[points]]                            # named points: nodes and node sets
+    name = "tip"
+    x = 0.18
+    y = 0.0665
+
+Node sets of the model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
+``patch:<name>:x0`` ... ``:y1``, and one set per point.
+
+:func:`build_model` is deterministic: the same description gives the same model, so a
+model updater can perturb any numeric field by its dotted path (``materials.steel.E``,
+``structure.length``, ``boundary.clamp_stiffness``) and rebuild (see
+:func:`set_by_path`).
+'''
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError, MvtkError
+from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._mesh import Patch
+from ._model import FEModel
+from ._plate import SpringSupport, plate_model
+
+__all__ = ["build_model", "load_structure", "set_by_path", "get_by_path"]
+
+_ORTHO_KEYS = ("E1", "E2", "G12", "G13", "G23", "nu12", "rho")
+
+
+def load_structure(path: str | Path) -> dict:
+    """Read a structure TOML file into a dict.
+
+    Raises
+    ------
+    ConfigError
+        If the file is missing or not valid TOML (message names the file).
+    """
+    path = Path(path)
+    try:
+        with path.open("rb") as fh:
+            return tomllib.load(fh)
+    except FileNotFoundError:
+        raise ConfigError(f"structure file {str(path)!r} not found") from None
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"structure file {str(path)!r} is not valid TOML: {err}") from err
+
+
+def get_by_path(d: Mapping, path: str) -> Any:
+    """Value at a dotted path (``"materials.steel.E"``; list items by index ``layers.0``)."""
+    cur: Any = d
+    for part in path.split("."):
+        try:
+            cur = cur[int(part)] if isinstance(cur, list) else cur[part]
+        except (KeyError, IndexError, ValueError, TypeError):
+            raise ConfigError(f"no entry {path!r} in the structure (failed at {part!r})") from None
+    return cur
+
+
+def set_by_path(d: Mapping, path: str, value: Any) -> dict:
+    """Copy of ``d`` with the entry at dotted ``path`` replaced by ``value``."""
+    out = copy.deepcopy(dict(d))
+    parts = path.split(".")
+    parent = get_by_path(out, ".".join(parts[:-1])) if len(parts) > 1 else out
+    last = parts[-1]
+    if isinstance(parent, list):
+        try:
+            parent[int(last)] = value
+        except (IndexError, ValueError):
+            raise ConfigError(f"no entry {path!r} in the structure") from None
+    elif isinstance(parent, dict) and last in parent:
+        parent[last] = value
+    else:
+        raise ConfigError(f"no entry {path!r} in the structure")
+    return out
+
+
+def _table(d: Mapping, key: str, where: str) -> Mapping:
+    v = d.get(key)
+    if not isinstance(v, Mapping):
+        raise ConfigError(f"{where}{key}: expected a table, got {type(v).__name__}")
+    return v
+
+
+def _number(d: Mapping, key: str, where: str, positive: bool = True,
+            required: bool = True, default: float | None = None) -> float | None:
+    if key not in d:
+        if required:
+            raise ConfigError(f"{where}{key}: required number missing")
+        return default
+    v = d[key]
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not np.isfinite(v):
+        raise ConfigError(f"{where}{key}: expected a number, got {v!r}")
+    if positive and v <= 0:
+        raise ConfigError(f"{where}{key}: expected a positive number, got {v!r}")
+    return float(v)
+
+
+def _material(name: str, d: Any):
+    where = f"materials.{name}."
+    if not isinstance(d, Mapping):
+        raise ConfigError(f"materials.{name}: expected a table, got {type(d).__name__}")
+    try:
+        if "E1" in d:
+            unknown = set(d) - set(_ORTHO_KEYS)
+            if unknown:
+                raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; "
+                                  f"orthotropic materials take {list(_ORTHO_KEYS)}")
+            vals = {k: _number(d, k, where, positive=(k != "nu12")) for k in _ORTHO_KEYS}
+            return OrthotropicMaterial(name=name, **vals)
+        allowed = {"E", "nu", "rho", "d31"}
+        unknown = set(d) - allowed
+        if unknown:
+            raise ConfigError(
+                f"{where}: unknown keys {sorted(unknown)}; isotropic materials take E, nu, rho "
+                "(and d31 for piezo), orthotropic ones E1, E2, G12, G13, G23, nu12, rho"
+            )
+        E = _number(d, "E", where)
+        nu = _number(d, "nu", where, positive=False)
+        rho = _number(d, "rho", where)
+        if "d31" in d:
+            return PiezoMaterial(name, E, nu, rho, _number(d, "d31", where, positive=False))
+        return IsotropicMaterial(name, E, nu, rho)
+    except ConfigError:
+        raise
+    except MvtkError as err:
+        raise ConfigError(f"materials.{name}: {err}") from err
+
+
+def _plies(layers: Any, materials: Mapping, where: str) -> list[Ply]:
+    if not isinstance(layers, list) or not layers:
+        raise ConfigError(f"{where}: expected a non-empty list of layers")
+    out = []
+    for i, layer in enumerate(layers):
+        w = f"{where}[{i}]."
+        if not isinstance(layer, Mapping):
+            raise ConfigError(f"{where}[{i}]: expected a table with material and thickness")
+        unknown = set(layer) - {"material", "thickness", "angle"}
+        if unknown:
+            raise ConfigError(f"{w}: unknown keys {sorted(unknown)}; "
+                              "expected material, thickness, angle")
+        mat = layer.get("material")
+        if mat not in materials:
+            raise ConfigError(
+                f"{w}material: {mat!r} is not defined; defined materials: {sorted(materials)}"
+            )
+        t = _number(layer, "thickness", w)
+        angle = _number(layer, "angle", w, positive=False, required=False, default=0.0)
+        out.append(Ply(materials[mat], t, angle))
+    return out
+
+
+def build_model(structure: Mapping | str | Path) -> FEModel:
+    """Build an :class:`FEModel` from a structure description.
+
+    Parameters
+    ----------
+    structure : dict or path
+        A parsed description or the path of a TOML file (schema in the module docstring).
+
+    Returns
+    -------
+    FEModel
+        ``meta["structure"]`` is a deep copy of the description (a dict).
+
+    Raises
+    ------
+    ConfigError
+        For any invalid entry; the message names the dotted key.
+    """
+    source = None
+    if isinstance(structure, (str, Path)):
+        source = str(structure)
+        structure = load_structure(structure)
+    if not isinstance(structure, Mapping):
+        raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
+    s = copy.deepcopy(dict(structure))
+    known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points"}
+    unknown = set(s) - known
+    if unknown:
+        raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
+    mats_d = _table(s, "materials", "")
+    materials = {str(k): _material(str(k), v) for k, v in mats_d.items()}
+    st = _table(s, "structure", "")
+    kind = st.get("type", "plate")
+    if kind != "plate":
+        raise ConfigError(f"structure.type: expected 'plate', got {kind!r}")
+    length = _number(st, "length", "structure.")
+    width = _number(st, "width", "structure.")
+    ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
+    unknown = set(st) - {"type", "length", "width", "layers", "shear_correction"}
+    if unknown:
+        raise ConfigError(f"structure: unknown keys {sorted(unknown)}; expected type, length, "
+                          "width, layers, shear_correction")
+    layers = _plies(st.get("layers"), materials, "structure.layers")
+
+    patches = []
+    for i, p in enumerate(s.get("patches", [])):
+        w = f"patches[{i}]."
+        if not isinstance(p, Mapping):
+            raise ConfigError(f"patches[{i}]: expected a table")
+        name = p.get("name")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
+        coords = [_number(p, k, w, positive=False) for k in ("x0", "x1", "y0", "y1")]
+        patches.append((Patch(name, *coords), _plies(p.get("layers"), materials, w + "layers")))
+
+    mesh = s.get("mesh", {})
+    if not isinstance(mesh, Mapping):
+        raise ConfigError("mesh: expected a table")
+    unknown = set(mesh) - {"nx", "ny", "element_size"}
+    if unknown:
+        raise ConfigError(f"mesh: unknown keys {sorted(unknown)}; expected nx, ny, element_size")
+    for k in ("nx", "ny"):
+        if k in mesh and (isinstance(mesh[k], bool) or not isinstance(mesh[k], int)
+                          or mesh[k] < 1):
+            raise ConfigError(f"mesh.{k}: expected a positive integer, got {mesh[k]!r}")
+    if ("nx" in mesh) != ("ny" in mesh) and "element_size" not in mesh:
+        raise ConfigError("mesh: give both nx and ny, or element_size")
+    if not mesh:
+        raise ConfigError("mesh: missing; give nx and ny, or element_size")
+    esize = _number(mesh, "element_size", "mesh.", required=False)
+
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    unknown = set(b) - {"clamp", "clamp_stiffness", "clamp_translational_stiffness", "edges",
+                        "springs"}
+    if unknown:
+        raise ConfigError(f"boundary: unknown keys {sorted(unknown)}; expected clamp, "
+                          "clamp_stiffness, clamp_translational_stiffness, edges, springs")
+    clamp = b.get("clamp")
+    if clamp is not None and clamp not in ("x0", "x1", "y0", "y1"):
+        raise ConfigError(f"boundary.clamp: expected one of x0, x1, y0, y1, got {clamp!r}")
+    cs = _number(b, "clamp_stiffness", "boundary.", required=False)
+    cts = _number(b, "clamp_translational_stiffness", "boundary.", required=False)
+    edges = b.get("edges", {})
+    if not isinstance(edges, Mapping):
+        raise ConfigError("boundary.edges: expected a table such as { y0 = 'free' }")
+    springs = []
+    for i, sp_ in enumerate(b.get("springs", [])):
+        w = f"boundary.springs[{i}]."
+        if not isinstance(sp_, Mapping):
+            raise ConfigError(f"boundary.springs[{i}]: expected a table")
+        springs.append(SpringSupport(
+            str(sp_.get("node_set")), str(sp_.get("dof")), _number(sp_, "k", w, positive=False),
+            bool(sp_.get("per_length", False)),
+        ))
+
+    points = {}
+    for i, p in enumerate(s.get("points", [])):
+        w = f"points[{i}]."
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name, x, y")
+        points[p["name"]] = (_number(p, "x", w, positive=False), _number(p, "y", w,
+                                                                          positive=False))
+    meta = {"structure": s}
+    if source is not None:
+        meta["source"] = source
+    try:
+        return plate_model(
+            length, width, layers, patches=patches, nx=mesh.get("nx"), ny=mesh.get("ny"),
+            element_size=esize, supports=dict(edges), clamp=clamp, clamp_stiffness=cs,
+            clamp_translational_stiffness=cts, springs=springs, points=points,
+            shear_correction=ks, name=str(s.get("name", "")), meta=meta,
+        )
+    except ConfigError:
+        raise
+    except MvtkError as err:
+        raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
+            from err
