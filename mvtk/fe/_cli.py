@@ -1,0 +1,48 @@
+"""``mvtk modes STRUCTURE.toml -n 6 [--json]``: natural frequencies of a structure."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+__all__ = ["add_parser"]
+
+
+def add_parser(subparsers) -> None:
+    """Register the ``modes`` sub-command."""
+    p = subparsers.add_parser(
+        "modes",
+        help="natural frequencies of a structure TOML",
+        description="Build the FE model of a structure description (TOML) and print its "
+        "lowest natural frequencies (Hz) with mode types.",
+    )
+    p.add_argument("structure", help="structure description (TOML), see mvtk.fe.build_model")
+    p.add_argument("-n", "--n-modes", type=int, default=6, help="number of modes (default 6)")
+    p.add_argument("--json", action="store_true",
+                   help='print {"fn_hz": [...], "mode_type": [...], "n_dof": N} as JSON')
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``mvtk modes``; returns the exit code (errors propagate as MvtkError)."""
+    from ._modal import modal_analysis
+    from ._structure import build_model
+
+    model = build_model(args.structure)
+    res = modal_analysis(model, args.n_modes)
+    if args.json:
+        out = {
+            "fn_hz": [float(f) for f in res.fn_hz],
+            "mode_type": list(res.mode_type),
+            "n_dof": int(model.n_dof),
+        }
+        sys.stdout.write(json.dumps(out) + "\n")
+        return 0
+    title = model.name or str(args.structure)
+    lines = [f"{title}: {model.n_dof} DOF, {model.n_elements} elements", "",
+             f"{'mode':>4}  {'fn_hz':>12}  type"]
+    for i, (f, t) in enumerate(zip(res.fn_hz, res.mode_type), start=1):
+        lines.append(f"{i:>4}  {f:12.4f}  {t}")
+    sys.stdout.write("\n".join(lines) + "\n")
+    return 0
