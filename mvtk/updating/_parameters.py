@@ -157,8 +157,8 @@ class Parameter:
                 )
         if not self.lower < self.upper:
             raise ParameterError(
-                f"parameter {self.path!r}: lower bound {self.lower} must be below "
-                f"upper bound {self.upper}"
+                f"parameter {self.path!r}: lower bound {self.lower:g} must be below "
+                f"upper bound {self.upper:g}"
             )
         if self.initial is not None and not (
             _is_number(self.initial) and math.isfinite(self.initial)
