@@ -1,0 +1,311 @@
+"""Make the SYNTHETIC smart-beam measurement files in ``data/smart_beam/``.
+
+Everything written here is SYNTHETIC: simulated by this script, not measured. The file
+names start with ``SYNTHETIC_`` and every header says so.
+
+The "truth" structure
+---------------------
+The paper (Ghareeb & Schmidt, smart beam; see ``/work/shared/PHYSICS.md`` section 1)
+measured f1 = 13.26 Hz and f2 = 41.14 Hz with Rayleigh damping identified from
+zeta1 = 5.84e-4 and zeta2 = 1.32e-3 (alpha = 0.02955 1/s, beta = 9.77e-6 s). The truth
+structure of this script is a clamped steel strip with a smeared PZT patch that
+reproduces those two measured frequencies exactly. It *differs from the nominal model*
+of ``data/smart_beam/study.toml`` in the ways a real specimen differs from its drawing:
+
+- the steel modulus is 200 GPa in the truth, 210 GPa nominal (paper Table 1);
+- the clamp is compliant in the truth (the nominal model is perfectly clamped), which
+  lowers the bending frequencies more than the torsion ones;
+- the higher modes are those of the truth (bending 2 near 83 Hz, torsion 2 near
+  123 Hz) which the paper does not list.
+
+Because the truth is defined by its modal parameters, the response is computed by modal
+superposition of the modes listed in :data:`TRUTH_MODES`: for mode i, natural
+frequency ``fn_hz``, damping ratio from the paper's Rayleigh pair, and the
+mass-normalised mode-shape values at the impact point and at the sensor
+(``phi_force``, ``phi_sensor`` in 1/sqrt(kg)). The shape values come from cantilever
+beam functions (bending) and a linear-in-width, quarter-sine-in-length torsion shape
+over a strip of 180 mm x 133 mm with 4.0 kg/m^2 (0.5 mm steel plus the smeared patch).
+To switch to an FE truth model later, replace :func:`truth_modes` by one that returns
+the same table from ``mvtk.fe.modal_analysis``.
+
+The two tests
+-------------
+1. Impact test (``SYNTHETIC_smart_beam_impact.*``): 3 hammer hits 128 s apart (a
+   half-sine pulse of 1.5 ms and about 5 N at (170, 110) mm), force and tip
+   acceleration at (180, 20) mm, simulated at 2048 Hz, with sensor noise, an 8th-order
+   Butterworth anti-aliasing filter at 50 Hz applied to both channels (like a DAQ's
+   analogue filter) and decimation to 128 Hz. 128 s records give 1/128 Hz lines: about
+   one line across the mode-1 half-power band, which the damping estimators must flag.
+2. Free decay (``SYNTHETIC_smart_beam_decay.*``): 150 s of tip displacement (laser) and
+   tip acceleration after the beam is released from a forced vibration in mode 1
+   (2 mm tip amplitude; mode 2 left over at 1 % of the mode-1 modal amplitude,
+   invisible to the laser on the centre line), same noise / filter / decimation.
+
+Formats: CSV with a ``#`` comment header (what, units, sampling rate, seed) and one
+column per channel; UFF 58b (binary, float64 ordinates, one record per channel) written
+with pyuff. Total size is about 4.5 MB.
+
+Run ``python data/make_smart_beam_data.py`` (seed 20261122; the output is reproducible
+bit for bit for a given numpy/scipy version).
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy import signal
+
+SEED = 20261122
+FS_SIM = 2048.0  # Hz, simulation rate
+DECIMATE = 16  # -> 128 Hz stored
+FS_OUT = FS_SIM / DECIMATE
+AA_CUTOFF_HZ = 50.0
+AA_ORDER = 8
+
+# Rayleigh pair of the paper's measured damping (PHYSICS.md section 2)
+ZETA1, F1 = 5.84e-4, 13.26
+ZETA2, F2 = 1.32e-3, 41.14
+
+# Truth geometry used for the mode-shape values (an explicit assumption, see docstring)
+LENGTH, WIDTH, MASS_PER_AREA = 0.180, 0.133, 4.0  # m, m, kg/m^2
+IMPACT_XY = (0.170, 0.110)  # m
+SENSOR_XY = (0.180, 0.020)  # m (tip sensor, off the centre line so torsion is seen)
+TIP_XY = (0.180, 0.0665)  # m (laser on the tip centre line for the free decay)
+
+
+@dataclass(frozen=True)
+class Mode:
+    """One truth mode: frequency (Hz), damping ratio, shape values (1/sqrt(kg))."""
+
+    name: str
+    fn_hz: float
+    zeta: float
+    phi_force: float
+    phi_sensor: float
+    phi_tip: float
+
+
+def rayleigh_pair(f1: float = F1, z1: float = ZETA1, f2: float = F2, z2: float = ZETA2):
+    """Two-mode Rayleigh alpha (1/s), beta (s) (PHYSICS.md section 2 closed form)."""
+    w1, w2 = 2 * np.pi * f1, 2 * np.pi * f2
+    alpha = 2 * w1 * w2 * (z1 * w2 - z2 * w1) / (w2**2 - w1**2)
+    beta = 2 * (z2 * w2 - z1 * w1) / (w2**2 - w1**2)
+    return alpha, beta
+
+
+def rayleigh_zeta(fn_hz: float, alpha: float, beta: float) -> float:
+    w = 2 * np.pi * fn_hz
+    return alpha / (2 * w) + beta * w / 2
+
+
+def _bending_shape(n: int, x: float) -> float:
+    """Cantilever beam function normalised to int_0^L phi^2 dx = L."""
+    bl = (1.87510407, 4.69409113, 7.85475744)[n]
+    b = bl / LENGTH
+    s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
+    return float(np.cosh(b * x) - np.cos(b * x) - s * (np.sinh(b * x) - np.sin(b * x)))
+
+
+def _torsion_shape(k: int, x: float, y: float) -> float:
+    """sin((2k+1) pi x / 2L) (y - b/2), not normalised."""
+    return float(np.sin((2 * k + 1) * np.pi * x / (2 * LENGTH)) * (y - WIDTH / 2))
+
+
+def truth_modes() -> list[Mode]:
+    """The truth structure's modes below the anti-aliasing cut-off and just above it.
+
+    Bending modes: f_n = f1 (beta_n L / beta_1 L)^2; torsion modes: f = (2k+1) f2.
+    Mass normalisation over the strip: bending phi(x) / sqrt(m), torsion with
+    ``int int m_A phi^2 = 1``.
+    """
+    alpha, beta = rayleigh_pair()
+    m_total = MASS_PER_AREA * LENGTH * WIDTH
+    ratios = np.array([1.87510407, 4.69409113, 7.85475744]) ** 2 / 1.87510407**2
+    modes = []
+    # torsion norm: int sin^2 = L/2, int (y - b/2)^2 dy = b^3/12
+    c_t = 1.0 / np.sqrt(MASS_PER_AREA * (LENGTH / 2) * WIDTH**3 / 12)
+    table = [("bending 1", F1, "b", 0), ("torsion 1", F2, "t", 0),
+             ("bending 2", F1 * ratios[1], "b", 1), ("torsion 2", 3 * F2, "t", 1),
+             ("bending 3", F1 * ratios[2], "b", 2)]
+    for name, fn, kind, n in table:
+        if kind == "b":
+            def shape(xy, n=n):
+                return _bending_shape(n, xy[0]) / np.sqrt(m_total)
+        else:
+            def shape(xy, n=n):
+                return c_t * _torsion_shape(n, xy[0], xy[1])
+        modes.append(Mode(name, fn, rayleigh_zeta(fn, alpha, beta),
+                          shape(IMPACT_XY), shape(SENSOR_XY), shape(TIP_XY)))
+    return modes
+
+
+def _modal_filter(mode: Mode, quantity: str, dt: float):
+    """Discrete (b, a) from force to ``quantity`` of one mode (first-order hold)."""
+    w = 2 * np.pi * mode.fn_hz
+    den = [1.0, 2 * mode.zeta * w, w**2]
+    num = [1.0, 0.0, 0.0] if quantity == "acceleration" else [0.0, 0.0, 1.0]
+    b, a, _ = signal.cont2discrete((num, den), dt, method="foh")
+    return np.ravel(b), np.ravel(a)
+
+
+def _anti_alias_and_decimate(x: np.ndarray) -> np.ndarray:
+    sos = signal.butter(AA_ORDER, AA_CUTOFF_HZ, fs=FS_SIM, output="sos")
+    return signal.sosfilt(sos, x)[::DECIMATE]
+
+
+def impact_test(rng: np.random.Generator, modes: list[Mode], n_hits: int = 3,
+                record_s: float = 128.0):
+    """Force (N) and tip acceleration (m/s^2) at FS_OUT, SYNTHETIC."""
+    n = int(round(n_hits * record_s * FS_SIM))
+    dt = 1.0 / FS_SIM
+    force = np.zeros(n)
+    pulse_t = np.arange(int(round(1.5e-3 * FS_SIM)) + 1) * dt
+    hit_times = []
+    for k in range(n_hits):
+        t0 = k * record_s + 1.0 + rng.uniform(-0.05, 0.05)
+        i0 = int(round(t0 * FS_SIM))
+        amp = 5.0 * rng.uniform(0.8, 1.2)
+        force[i0:i0 + pulse_t.size] += amp * np.sin(np.pi * pulse_t / pulse_t[-1])
+        hit_times.append(i0 * dt)
+    acc = np.zeros(n)
+    for m in modes:
+        b, a = _modal_filter(m, "acceleration", dt)
+        acc += m.phi_force * m.phi_sensor * signal.lfilter(b, a, force)
+    force_meas = force + rng.normal(0.0, 0.005, n)  # N, hammer noise
+    acc_meas = acc + rng.normal(0.0, 0.01, n)  # m/s^2, accelerometer noise
+    return (_anti_alias_and_decimate(force_meas), _anti_alias_and_decimate(acc_meas),
+            np.array(hit_times))
+
+
+def free_decay(rng: np.random.Generator, modes: list[Mode], duration_s: float = 150.0,
+               tip_amplitude: float = 2e-3, pre_roll_s: float = 2.0):
+    """Tip displacement (m) and acceleration (m/s^2) of a release from mode 1, SYNTHETIC.
+
+    The closed-form decay is evaluated from ``-pre_roll_s`` so that the causal
+    anti-aliasing filter has settled when the stored record starts at t = 0.
+    """
+    t = (np.arange(int(round((duration_s + pre_roll_s) * FS_SIM))) / FS_SIM) - pre_roll_s
+    disp = np.zeros_like(t)
+    acc = np.zeros_like(t)
+    q1 = tip_amplitude / modes[0].phi_tip  # modal amplitude of mode 1 (sqrt(kg) m)
+    amplitudes = {"bending 1": q1, "torsion 1": 0.01 * q1}
+    for m in modes:
+        q0 = amplitudes.get(m.name, 0.0)
+        if q0 == 0.0:
+            continue
+        w = 2 * np.pi * m.fn_hz
+        wd = w * np.sqrt(1 - m.zeta**2)
+        q = np.exp(-m.zeta * w * t) * (np.cos(wd * t) + m.zeta * w / wd * np.sin(wd * t))
+        # exact second derivative of q for the free decay: q'' = -2 z w q' - w^2 q
+        qd = -np.exp(-m.zeta * w * t) * (w**2 / wd) * np.sin(wd * t)
+        qdd = -2 * m.zeta * w * qd - w**2 * q
+        disp += q0 * m.phi_tip * q
+        acc += q0 * m.phi_sensor * qdd
+    disp_meas = disp + rng.normal(0.0, 2e-6, t.size)  # m, laser noise
+    acc_meas = acc + rng.normal(0.0, 0.01, t.size)  # m/s^2
+    n0 = int(round(pre_roll_s * FS_OUT))
+    return (_anti_alias_and_decimate(disp_meas)[n0:], _anti_alias_and_decimate(acc_meas)[n0:])
+
+
+def _csv(path: Path, header: list[str], columns: dict[str, np.ndarray]) -> None:
+    n = len(next(iter(columns.values())))
+    time = np.arange(n) / FS_OUT
+    data = np.column_stack([time, *columns.values()])
+    lines = [f"# {h}" for h in header]
+    lines.append(",".join(["time_s", *columns]))
+    with path.open("w", encoding="utf-8", newline="\n") as fh:
+        fh.write("\n".join(lines) + "\n")
+        np.savetxt(fh, data, delimiter=",", fmt=["%.7f"] + ["%.5e"] * len(columns))
+
+
+def _uff(path: Path, title: str, channels: list[dict]) -> None:
+    import pyuff
+
+    if path.exists():
+        path.unlink()
+    uff = pyuff.UFF(str(path))
+    sets = []
+    for ch in channels:
+        data = np.asarray(ch["data"], dtype=float)
+        dset = pyuff.prepare_58(
+            binary=1, id1=f"SYNTHETIC {title}", id2=ch["name"],
+            id3=f"simulated by data/make_smart_beam_data.py (seed {SEED})",
+            id4="NOT A MEASUREMENT", id5="mvtk example data",
+            func_type=1, rsp_node=ch["node"], rsp_dir=3, ref_node=ch["ref_node"], ref_dir=3,
+            data=data, x=np.arange(data.size) / FS_OUT,
+            ordinate_spec_data_type=ch["spec_data_type"], abscissa_spec_data_type=17,
+            ordinate_len_unit_exp=0 if ch["units"] == "N" else 1,
+            ordinate_force_unit_exp=1 if ch["units"] == "N" else 0,
+            orddenom_spec_data_type=0, z_axis_spec_data_type=0,
+            ordinate_axis_units_lab=ch["units"], abscissa_axis_units_lab="s",
+            rsp_ent_name="beam", ref_ent_name="beam", ver_num=0, load_case_id=0,
+            ord_data_type=4, abscissa_spacing=1, abscissa_min=0.0, abscissa_inc=1.0 / FS_OUT,
+            z_axis_value=0.0, orddenom_len_unit_exp=0, orddenom_force_unit_exp=0,
+            orddenom_temp_unit_exp=0, orddenom_axis_units_lab="NONE",
+            z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0,
+            z_axis_axis_units_lab="NONE", abscissa_len_unit_exp=0, abscissa_force_unit_exp=0,
+            abscissa_temp_unit_exp=0, ordinate_temp_unit_exp=0,
+        )
+        sets.append(dset)
+    # pyuff 2.5.8 always writes 58b ordinates as float64 (its writer ignores
+    # ord_data_type 2), so the file declares double precision (ord_data_type 4).
+    uff.write_sets(sets, mode="add", force_double=True)
+
+
+def main(out_dir: Path) -> list[Path]:
+    rng = np.random.default_rng(SEED)
+    modes = truth_modes()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    force, acc, hits = impact_test(rng, modes)
+    disp_d, acc_d = free_decay(rng, modes)
+    common = [
+        "SYNTHETIC DATA - simulated, not measured (mvtk example files)",
+        f"generator: data/make_smart_beam_data.py, seed {SEED}",
+        "structure: truth smart beam (steel E 200 GPa, compliant clamp), see script docstring",
+        f"sampling_rate_hz: {FS_OUT:g}",
+        f"anti_alias: Butterworth order {AA_ORDER}, {AA_CUTOFF_HZ:g} Hz, both channels",
+        "truth modes: " + "; ".join(f"{m.name} {m.fn_hz:.3f} Hz zeta {m.zeta:.3e}"
+                                    for m in modes),
+    ]
+    written = []
+    p = out_dir / "SYNTHETIC_smart_beam_impact.csv"
+    _csv(p, ["SYNTHETIC impact test: 3 hammer hits, records of 128 s", *common,
+             "hit_times_s: " + " ".join(f"{h:.4f}" for h in hits),
+             "channels: force_N (node 1, impact at x=170 mm y=110 mm, +z), "
+             "accel_m_s2 (node 5, tip sensor at x=180 mm y=20 mm, +z)"],
+         {"force_N": force, "accel_m_s2": acc})
+    written.append(p)
+    p = out_dir / "SYNTHETIC_smart_beam_decay.csv"
+    _csv(p, ["SYNTHETIC free decay from mode 1 (release at t = 0)", *common,
+             "channels: tip_disp_m (laser on tip centre x=180 mm y=66.5 mm, +z), "
+             "accel_m_s2 (node 5, x=180 mm y=20 mm, +z)"],
+         {"tip_disp_m": disp_d, "accel_m_s2": acc_d})
+    written.append(p)
+    p = out_dir / "SYNTHETIC_smart_beam_impact.uff"
+    _uff(p, "impact test", [
+        {"name": "force", "data": force, "node": 1, "ref_node": 1, "spec_data_type": 13,
+         "units": "N"},
+        {"name": "tip acceleration", "data": acc, "node": 5, "ref_node": 1,
+         "spec_data_type": 12, "units": "m/s^2"},
+    ])
+    written.append(p)
+    p = out_dir / "SYNTHETIC_smart_beam_decay.uff"
+    _uff(p, "free decay", [
+        {"name": "tip displacement", "data": disp_d, "node": 6, "ref_node": 0,
+         "spec_data_type": 8, "units": "m"},
+        {"name": "tip acceleration", "data": acc_d, "node": 5, "ref_node": 0,
+         "spec_data_type": 12, "units": "m/s^2"},
+    ])
+    written.append(p)
+    return written
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "smart_beam")
+    args = parser.parse_args()
+    for path in main(args.out):
+        print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")
