@@ -1,3 +1,17 @@
-"""mvtk.damping (see DESIGN.md)."""
+"""Damping identification: half-power bandwidth, free-decay fits, Rayleigh alpha/beta."""
 
-__all__: list[str] = []
+from ._decay import DecayResult, envelope_fit, log_decrement
+from ._half_power import HalfPowerResult, half_power, half_power_zeta
+from ._rayleigh import RayleighFit, rayleigh_fit, rayleigh_zeta
+
+__all__ = [
+    "DecayResult",
+    "HalfPowerResult",
+    "RayleighFit",
+    "envelope_fit",
+    "half_power",
+    "half_power_zeta",
+    "log_decrement",
+    "rayleigh_fit",
+    "rayleigh_zeta",
+]

@@ -1,0 +1,135 @@
+"""Turn FRFs and spectra (xarray or numpy) into amplitude curves for peak-based methods."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import xarray as xr
+
+from ..errors import DimensionError, FormatError, ParameterError
+
+__all__ = ["AmplitudeCurves", "amplitude_curves"]
+
+_KINDS = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
+
+
+@dataclass(frozen=True)
+class AmplitudeCurves:
+    """Amplitude (never power) curves on a common frequency axis.
+
+    ``amplitude`` has shape (n_curves, n_freq): ``|H|`` of an FRF or ``sqrt(PSD)``.
+    """
+
+    f_hz: np.ndarray
+    amplitude: np.ndarray
+    labels: tuple[str, ...]
+    kinds: tuple[str, ...]
+    attrs: dict
+
+
+def _check_frequency(f: np.ndarray, where: str) -> np.ndarray:
+    f = np.asarray(f, dtype=float)
+    if f.ndim != 1 or f.size < 3:
+        raise DimensionError(f"{where}: need a 1-D frequency axis of >= 3 lines, got {f.shape}")
+    df = np.diff(f)
+    if np.any(~np.isfinite(f)) or np.any(df <= 0):
+        raise FormatError(f"{where}: frequency axis (Hz) must be finite and increasing")
+    return f
+
+
+def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
+                     kind: str = "auto") -> AmplitudeCurves:
+    """Amplitude curves from an FRF or spectrum.
+
+    Parameters
+    ----------
+    spectrum : xarray.Dataset, xarray.DataArray or array_like
+        * Dataset with an ``"frf"`` variable (from :func:`mvtk.signal.frf`);
+        * DataArray FRF, dims ``("response", "reference", "frequency")``;
+        * DataArray spectrum, dims ``("channel", "frequency")`` (``attrs["spectrum"] ==
+          "psd"`` marks a power spectrum);
+        * numpy array (n_freq,) or (n_curves, n_freq) with ``f_hz`` given.
+    f_hz : array_like, optional
+        Frequency lines in Hz for numpy input.
+    power : bool, optional
+        True if the values are a power quantity (PSD): the square root is taken.
+        Default: from ``attrs["spectrum"]`` for xarray input, False for numpy input.
+    kind : {"auto", "receptance", "mobility", "accelerance"}
+        FRF type; ``"auto"`` reads ``attrs["kind"]`` or the response ``quantity``.
+    """
+    if kind not in ("auto", "receptance", "mobility", "accelerance"):
+        raise ParameterError(
+            f"kind must be 'auto', 'receptance', 'mobility' or 'accelerance', got {kind!r}"
+        )
+    attrs: dict = {}
+    if isinstance(spectrum, xr.Dataset):
+        if "frf" not in spectrum.data_vars:
+            raise FormatError(
+                f"expected a Dataset with an 'frf' variable, found {sorted(map(str, spectrum))}"
+            )
+        attrs = dict(spectrum.attrs)
+        spectrum = spectrum["frf"]
+    if isinstance(spectrum, xr.DataArray):
+        attrs = {**attrs, **spectrum.attrs}
+        if "frequency" not in spectrum.dims:
+            raise DimensionError(
+                f"expected a 'frequency' dimension, found dims {tuple(map(str, spectrum.dims))}"
+            )
+        f = _check_frequency(spectrum["frequency"].values, "spectrum")
+        other = [d for d in spectrum.dims if d != "frequency"]
+        da = spectrum.transpose(*other, "frequency")
+        vals = np.asarray(da.values)
+        if set(other) == {"response", "reference"}:
+            da = spectrum.transpose("response", "reference", "frequency")
+            vals = np.asarray(da.values)
+            labels = [f"{a}/{b}" for a in da["response"].values for b in da["reference"].values]
+            qty = [str(q) for q in da["response_quantity"].values] \
+                if "response_quantity" in da.coords else [""] * da.sizes["response"]
+            auto = [attrs.get("kind") or _KINDS.get(q, "") for q in qty
+                    for _ in range(da.sizes["reference"])]
+        elif other == ["channel"]:
+            labels = [str(c) for c in da["channel"].values]
+            qty = [str(q) for q in da["quantity"].values] if "quantity" in da.coords \
+                else [""] * len(labels)
+            auto = [attrs.get("kind") or _KINDS.get(q, "") for q in qty]
+        elif other == []:
+            labels = [str(spectrum.name or "spectrum")]
+            auto = [attrs.get("kind", "")]
+        else:
+            raise DimensionError(
+                "expected dims ('response', 'reference', 'frequency') or ('channel', "
+                f"'frequency'), found {tuple(map(str, spectrum.dims))}"
+            )
+        vals = vals.reshape(-1, f.size)
+        if power is None:
+            power = attrs.get("spectrum") in ("psd", "power")
+    else:
+        if f_hz is None:
+            raise ParameterError("f_hz (Hz) is required when the spectrum is a numpy array")
+        f = _check_frequency(f_hz, "f_hz")
+        vals = np.asarray(spectrum)
+        if vals.ndim == 1:
+            vals = vals[None, :]
+        if vals.ndim != 2 or vals.shape[1] != f.size:
+            raise DimensionError(
+                f"spectrum must have shape (n_freq,) or (n_curves, n_freq) with n_freq = "
+                f"{f.size} (len of f_hz), got {vals.shape}"
+            )
+        labels = [f"curve{i}" for i in range(vals.shape[0])]
+        auto = [""] * vals.shape[0]
+        power = bool(power)
+    if np.iscomplexobj(vals):
+        if power:
+            raise ParameterError("a complex spectrum cannot be a power quantity (power=True)")
+        amp = np.abs(vals)
+    else:
+        amp = np.asarray(vals, dtype=float)
+        if power:
+            if np.any(amp < 0):
+                raise FormatError("a power spectrum (PSD) must be >= 0; found negative values")
+            amp = np.sqrt(amp)
+        else:
+            amp = np.abs(amp)
+    kinds = tuple(kind if kind != "auto" else (k or "mobility") for k in auto)
+    return AmplitudeCurves(f, amp, tuple(labels), kinds, attrs)
