@@ -1,0 +1,91 @@
+"""netCDF output (``mvtk.io.write``) and input (h5netcdf engine; netCDF3 via scipy)."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import xarray as xr
+
+from ..errors import FormatError, ParameterError
+from ._build import clean_attrs
+from ._validate import validate
+
+__all__ = ["read_netcdf", "write", "sniff_netcdf", "NETCDF_EXTENSIONS"]
+
+NETCDF_EXTENSIONS = (".nc", ".nc4", ".netcdf", ".cdf")
+HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
+
+
+def sniff_netcdf(head: bytes) -> bool:
+    """netCDF3 classic/64-bit magic (netCDF4 files are HDF5 and are sniffed by content)."""
+    return head[:3] == b"CDF" and head[3:4] in (b"\x01", b"\x02", b"\x05")
+
+
+def read_netcdf(path: Path):
+    """Read a netCDF file (mvtk's own output round-trips exactly).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file (netCDF4/HDF5 read with h5netcdf, netCDF3 with scipy).
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+    engine = "scipy" if sniff_netcdf(head) else "h5netcdf"
+    if engine == "h5netcdf" and head != HDF5_MAGIC:
+        raise FormatError(
+            f"{path}: starts with {head!r}; expected the HDF5 signature of a netCDF4 file or "
+            "the 'CDF' signature of netCDF3"
+        )
+    try:
+        with xr.open_dataset(path, engine=engine, decode_times=False) as ds:
+            return ds.load()
+    except (OSError, ValueError, KeyError, TypeError) as err:
+        raise FormatError(
+            f"{path}: not a readable netCDF file ({type(err).__name__}: {err})"
+        ) from err
+
+
+def write(ds, path: str | os.PathLike) -> Path:
+    """Write a time history or Dataset to netCDF4 (h5netcdf), losslessly.
+
+    Data, coordinates (channel names, units, quantity, node, direction, n_missing, ...),
+    variable attrs and file attrs are kept; ``mvtk.io.read`` of the file gives an
+    identical Dataset except for ``attrs["source"]`` and ``attrs["format"]``, which
+    describe the last read.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset or xarray.DataArray
+        Must pass :func:`mvtk.io.validate`. A DataArray is stored as variable
+        ``"time_history"``.
+    path : str or path-like
+        Output file (``.nc`` recommended); overwritten if it exists.
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+
+    Raises
+    ------
+    mvtk.errors.ParameterError
+        ``ds`` is not an xarray object.
+    mvtk.errors.FormatError
+        ``ds`` breaks the mvtk conventions (see :func:`mvtk.io.validate`).
+    """
+    if isinstance(ds, xr.DataArray):
+        ds = ds.to_dataset(name="time_history")
+    if not isinstance(ds, xr.Dataset):
+        raise ParameterError(
+            f"write: expected an xarray.Dataset or DataArray, got {type(ds).__name__}"
+        )
+    validate(ds)
+    out = ds.copy(deep=False)
+    out.attrs = clean_attrs(ds.attrs)
+    for var in out.variables.values():
+        var.attrs = clean_attrs(var.attrs)
+    path = Path(path)
+    out.to_netcdf(path, engine="h5netcdf")
+    return path

@@ -1,0 +1,600 @@
+"""CSV / TSV / whitespace text exports of DAQ systems.
+
+Layout understood (all parts but the data optional)::
+
+    # Instrument: XYZ DAQ            <- metadata lines ``key: value``, ``key = value``
+    Sample rate: 10 kHz              <- or ``key<delimiter>value``; '#', '%', '//' prefixes ok
+    Time [s], acc1 [m/s^2], F (N)    <- column names, units in [] or ()
+    s, m/s^2, N                      <- or a separate units row
+    0.0000, 0.12, 3.4                <- numeric data, delimiter , ; tab or blanks,
+    ...                                 decimal point or decimal comma
+
+A time column (named time, t, zeit, timestamp; units s, ms or us) or a sampling-rate
+header (``sample rate``, ``sampling rate``, ``fs`` in Hz/kHz, or ``dt`` / ``sample
+interval`` in s/ms) gives the time axis. Metadata rows ``units:``, ``quantity:``,
+``node:`` and ``direction:`` with one value per channel are understood too.
+
+A file of one column of complex numbers written as ``(re+imj)`` (no header) is read as
+a spectrum when ``df_hz`` is given.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from ..errors import FormatError, MvtkWarning, ParameterError
+from ._build import assemble, clean_attrs
+from ._model import fs_from_dt, normalize_units, split_name_units, time_history
+
+__all__ = ["read_text", "sniff_text", "check_time_stamps", "TEXT_EXTENSIONS"]
+
+TEXT_EXTENSIONS = (".csv", ".tsv", ".txt", ".dat", ".asc", ".prn")
+_HEAD_BYTES = 1 << 18
+_NA_TOKENS = ["", "NaN", "nan", "NAN", "NA", "N/A", "#N/A", "null", "NULL", "-nan", "-NaN"]
+_NA_SET = frozenset(_NA_TOKENS)
+_TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s", "tiempo", "temps", "x_time"}
+_TIME_SCALE = {"s": 1.0, "sec": 1.0, "seconds": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
+_FS_KEYS = {
+    "fs",
+    "sample_rate",
+    "sampling_rate",
+    "samplerate",
+    "sampling_frequency",
+    "sample_frequency",
+    "sample_rate_hz",
+    "sampling_rate_hz",
+    "scan_rate",
+    "rate",
+}
+_DT_KEYS = {"dt", "sample_interval", "sampling_interval", "delta_t", "time_step", "increment"}
+_CHANNEL_KEYS = {
+    "units": "units",
+    "unit": "units",
+    "quantity": "quantity",
+    "quantities": "quantity",
+    "node": "node",
+    "nodes": "node",
+    "direction": "direction",
+    "directions": "direction",
+}
+_DELIMS = (",", ";", "\t", None)  # None = runs of blanks
+_NUM = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+
+
+def sniff_text(head: bytes) -> bool:
+    """True when the first bytes look like a text export (no NUL, mostly printable)."""
+    if b"\x00" in head:
+        return False
+    sample = head[:4096]
+    printable = sum(32 <= b < 127 or b in (9, 10, 13) for b in sample)
+    return printable >= 0.95 * len(sample)
+
+
+def _split(line: str, delim: str | None) -> list[str]:
+    if delim is None:
+        return line.split()
+    return [f.strip() for f in line.split(delim)]
+
+
+def _is_number(token: str, decimal: str) -> bool:
+    if decimal == ",":
+        token = token.replace(",", ".")
+    return bool(_NUM.match(token)) or token.lower() in ("nan", "inf", "-inf", "+inf")
+
+
+def _numeric_fields(line: str, delim: str | None, decimal: str) -> int:
+    """Field count when every field is a number or a missing-value token, else 0."""
+    fields = _split(line, delim)
+    if not fields or all(f in _NA_SET for f in fields):
+        return 0
+    for f in fields:
+        if f not in _NA_SET and not _is_number(f, decimal):
+            return 0
+    return len(fields)
+
+
+def _find_layout(lines: list[str]) -> tuple[int, str | None, str, int] | None:
+    """(first data line, delimiter, decimal, n fields) of the best-fitting layout.
+
+    The data start at the first numeric line followed by another numeric line (or by
+    nothing); the field count is the most common one among the next six data lines.
+    """
+    best = None
+    non_empty = [i for i, ln in enumerate(lines) if ln.strip()]
+    for delim in _DELIMS:
+        for decimal in (".", ","):
+            if decimal == "," and delim == ",":
+                continue
+            counts = {}
+            for pos, i in enumerate(non_empty):
+                k = counts.setdefault(i, _numeric_fields(lines[i], delim, decimal))
+                if k == 0:
+                    continue
+                nxt = non_empty[pos + 1] if pos + 1 < len(non_empty) else None
+                if nxt is not None and _numeric_fields(lines[nxt], delim, decimal) == 0:
+                    continue
+                window = [
+                    _numeric_fields(lines[j], delim, decimal) for j in non_empty[pos : pos + 6]
+                ]
+                window = [w for w in window if w]
+                n_fields = max(set(window), key=lambda w: (window.count(w), w))
+                cand = (i, -n_fields, delim, decimal)
+                if best is None or cand[:2] < best[:2]:
+                    best = cand
+                break
+    if best is None:
+        return None
+    return best[0], best[2], best[3], -best[1]
+
+
+def _metadata(line: str, delim: str | None) -> tuple[str, str] | None:
+    text = line.strip().lstrip("#%/").strip()
+    if not text:
+        return None
+    m = re.match(r"^([^:=]+?)\s*[:=]\s*(.*)$", text)
+    if m is None and delim is not None and delim in text:
+        key, _, value = text.partition(delim)
+        m_key, m_val = key.strip(), value.strip()
+    elif m is not None:
+        m_key, m_val = m.group(1), m.group(2)
+    else:
+        return None
+    key = re.sub(r"[^0-9a-zA-Z_]+", "_", m_key.strip().lower()).strip("_")
+    return (key, m_val.strip()) if key else None
+
+
+def _parse_rate(value: str, key: str, path: Path, line_no: int) -> float:
+    m = re.match(r"^\s*([+-]?[\d.,eE+-]+)\s*([a-zA-Zµ/]*)\s*$", value)
+    if m is None:
+        raise FormatError(
+            f"{path}, line {line_no}: {key} = {value!r} is not a number; expected e.g. "
+            "'10000', '10 kHz' or '1e-4 s'"
+        )
+    try:
+        number = float(m.group(1).replace(",", "."))
+    except ValueError as err:
+        raise FormatError(f"{path}, line {line_no}: {key} = {value!r} is not a number") from err
+    unit = m.group(2).lower()
+    if key in _DT_KEYS:
+        scale = {"": 1.0, "s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}.get(unit)
+        if scale is None or number <= 0:
+            raise FormatError(
+                f"{path}, line {line_no}: sample interval {value!r}; expected a positive number "
+                "in s, ms or us"
+            )
+        return fs_from_dt(number * scale)
+    scale = {"": 1.0, "hz": 1.0, "khz": 1e3, "s/s": 1.0, "sps": 1.0, "mhz": 1e6}.get(unit)
+    if scale is None or number <= 0:
+        raise FormatError(
+            f"{path}, line {line_no}: sampling rate {value!r}; expected a positive number in "
+            "Hz or kHz"
+        )
+    return number * scale
+
+
+def _decode_head(raw: bytes, encoding: str, path: Path) -> list[str]:
+    lines = raw.splitlines()
+    out = []
+    for i, b in enumerate(lines):
+        try:
+            out.append(b.decode(encoding))
+        except UnicodeDecodeError as err:
+            bad = b[err.start : err.start + 1]
+            raise FormatError(
+                f"{path}, line {i + 1}: byte {bad!r} at column {err.start + 1} is not valid "
+                f"{encoding}; expected {encoding} text (pass encoding='latin-1' or the "
+                "encoding the file was written with)"
+            ) from err
+    return out
+
+
+def _read_complex_column(path: Path, lines: list[str], df_hz, channels, units) -> list:
+    import xarray as xr
+
+    if df_hz is None:
+        raise FormatError(
+            f"{path}: one column of complex values and no frequency column; expected "
+            "df_hz=<line spacing in Hz> (and optionally f0_hz) to place the lines"
+        )
+    values = []
+    for i, line in enumerate(lines):
+        s = line.strip()
+        if not s:
+            continue
+        try:
+            values.append(complex(s.replace(" ", "")))
+        except ValueError as err:
+            raise FormatError(
+                f"{path}, line {i + 1}: {s!r} is not a complex number; expected '(re+imj)'"
+            ) from err
+    name = channels[0] if channels else path.stem
+    f = np.arange(len(values)) * float(df_hz)
+    da = xr.DataArray(
+        np.asarray(values, dtype=np.complex128)[np.newaxis, :],
+        dims=("channel", "frequency"),
+        coords={"channel": np.array([name], dtype=object), "frequency": f},
+        name="spectrum",
+        attrs={"units": units if isinstance(units, str) else "unspecified"},
+    )
+    da.frequency.attrs["units"] = "Hz"
+    return [da]
+
+
+def _diagnose(path: Path, start: int, delim, decimal: str, names: list[str], encoding: str):
+    """Slow scan that names the first bad line; returns per-column counts of NA tokens."""
+    n_fields = len(names)
+    na_counts = np.zeros(n_fields, dtype=np.int64)
+    with open(path, "rb") as fh:
+        for line_no, raw in enumerate(fh, start=1):
+            if line_no <= start:
+                continue
+            line = raw.decode("latin-1").rstrip("\r\n")
+            if not line.strip():
+                continue
+            fields = _split(line, delim)
+            if len(fields) != n_fields:
+                raise FormatError(
+                    f"{path}, line {line_no}: {len(fields)} fields; expected {n_fields} "
+                    f"({', '.join(names)}) as in the header (ragged row)"
+                )
+            for k, token in enumerate(fields):
+                if token in _NA_SET:
+                    na_counts[k] += 1
+                elif not _is_number(token, decimal):
+                    raise FormatError(
+                        f"{path}, line {line_no}, column {k + 1} ({names[k]!r}): {token!r} is "
+                        "not a number; expected a numeric value or a missing-value marker "
+                        "(empty, NaN, NA)"
+                    )
+    return na_counts
+
+
+def check_time_stamps(t: np.ndarray, path: Path, first_line: int, unit: str = "line") -> float:
+    """Sampling rate in Hz from strictly increasing, uniform (1 %) time stamps in s.
+
+    Errors name ``f"{path}, {unit} {first_line + i}"`` for the first bad stamp ``i``.
+    """
+    n = t.size
+    if n < 2:
+        raise FormatError(f"{path}: one data line only; expected at least two time stamps")
+    if not np.all(np.isfinite(t)):
+        i = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise FormatError(
+            f"{path}, {unit} {first_line + i}: time stamp missing; expected a finite time in s"
+        )
+    d = np.diff(t)
+    if np.any(d <= 0):
+        i = int(np.flatnonzero(d <= 0)[0]) + 1
+        raise FormatError(
+            f"{path}, {unit} {first_line + i}: time {t[i]!r} s is not after the previous "
+            f"{t[i - 1]!r} s; expected strictly increasing time stamps"
+        )
+    dt = (t[-1] - t[0]) / (n - 1)
+    bad = np.flatnonzero(np.abs(d - dt) > 0.01 * dt)
+    if bad.size:
+        i = int(bad[0]) + 1
+        raise FormatError(
+            f"{path}, {unit} {first_line + i}: time step {d[i - 1]!r} s before time {t[i]!r} s; "
+            f"expected a uniform step of {dt!r} s (within 1 %); non-uniform sampling"
+        )
+    return fs_from_dt(dt)
+
+
+def _per_channel_option(value, n: int, name: str):
+    if value is None:
+        return None
+    if isinstance(value, str) or np.isscalar(value):
+        return [value] * n
+    value = list(value)
+    if len(value) != n:
+        raise ParameterError(
+            f"read: {name} has {len(value)} entries; expected {n} (one per channel)"
+        )
+    return value
+
+
+def read_text(
+    path: Path,
+    *,
+    delimiter: str | None = None,
+    decimal: str | None = None,
+    encoding: str = "utf-8",
+    fs: float | None = None,
+    time_column: str | int | bool | None = None,
+    channels=None,
+    units=None,
+    quantity=None,
+    df_hz: float | None = None,
+):
+    """Read a CSV / TSV / text DAQ export.
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The file.
+    delimiter : str, optional
+        Field delimiter (``","``, ``";"``, ``"\\t"`` or ``" "`` for blanks); detected.
+    decimal : str, optional
+        ``"."`` or ``","``; detected.
+    encoding : str, default "utf-8"
+        Encoding of the header lines.
+    fs : float, optional
+        Sampling rate in Hz when the file has neither a time column nor a rate header.
+    time_column : str, int or bool, optional
+        Name or 0-based index of the time column; False when there is none. Detected
+        from the column names when omitted.
+    channels : sequence of str, optional
+        Channel names (overrides the header; needed when there is no header).
+    units, quantity : str or sequence of str, optional
+        Per-channel units / quantity overriding the header.
+    df_hz : float, optional
+        Line spacing in Hz for a headerless column of complex values.
+    """
+    with open(path, "rb") as fh:
+        raw = fh.read(_HEAD_BYTES)
+    if not raw.strip():
+        raise FormatError(f"{path}: the file holds no data (only blanks); expected a text export")
+    if len(raw) == _HEAD_BYTES:
+        raw = raw[: raw.rfind(b"\n") + 1] or raw
+    lines = _decode_head(raw, encoding, path)
+    if delimiter == " ":
+        delimiter = None
+    layout = _find_layout(lines)
+    if layout is None:
+        first = next((ln.strip() for ln in lines if ln.strip()), "")
+        if first.startswith("(") and first.endswith("j)"):
+            with open(path, encoding=encoding) as fh:
+                all_lines = fh.read().splitlines()
+            return assemble(_read_complex_column(path, all_lines, df_hz, channels, units))
+        raise FormatError(
+            f"{path}: no numeric data lines found in the first {len(lines)} lines; expected "
+            "rows of numbers separated by ',', ';', tab or blanks"
+        )
+    start, det_delim, det_decimal, n_fields = layout
+    delim = det_delim if delimiter is None else delimiter
+    dec = det_decimal if decimal is None else decimal
+    if delimiter is not None or decimal is not None:
+        n_fields = _numeric_fields(lines[start], delim, dec) or n_fields
+
+    # header: metadata lines, column names, units row
+    header = [(i, ln) for i, ln in enumerate(lines[:start]) if ln.strip()]
+    names_line = units_line = None
+    if header and len(_split(header[-1][1], delim)) == n_fields:
+        last = _split(header[-1][1], delim)
+        prev = _split(header[-2][1], delim) if len(header) > 1 else None
+        if prev is not None and len(prev) == n_fields and _looks_like_units(last):
+            names_line, units_line = header[-2], header[-1]
+        else:
+            names_line = header[-1]
+    meta_lines = [h for h in header if h not in (names_line, units_line)]
+    attrs: dict = {}
+    header_fs = None
+    per_channel: dict[str, list[str]] = {}
+    for i, ln in meta_lines:
+        kv = _metadata(ln, delim)
+        if kv is None:
+            attrs.setdefault("comment", "")
+            attrs["comment"] = (attrs["comment"] + "\n" + ln.strip()).strip()
+            continue
+        key, value = kv
+        if key in _FS_KEYS or key in _DT_KEYS:
+            rate = _parse_rate(value, key, path, i + 1)
+            if header_fs is not None and not np.isclose(rate, header_fs, rtol=1e-9):
+                raise FormatError(
+                    f"{path}, line {i + 1}: {key} gives {rate} Hz but an earlier header line "
+                    f"gives {header_fs} Hz; expected one sampling rate"
+                )
+            header_fs = rate
+        if key in _CHANNEL_KEYS:
+            per_channel[_CHANNEL_KEYS[key]] = _split(value, delim if delim else None)
+        attrs[key] = value
+
+    if names_line is not None:
+        raw_names = _split(names_line[1], delim)
+        header_line_no = names_line[0] + 1
+    elif channels is not None:
+        raw_names = None
+        header_line_no = None
+    else:
+        raise FormatError(
+            f"{path}: no column-name line before the data at line {start + 1}; expected a "
+            f"header with {n_fields} names (e.g. 'time [s], acc1 [m/s^2]') or channels=[...]"
+        )
+    names, col_units = [], []
+    if raw_names is not None:
+        for label in raw_names:
+            name, unit = split_name_units(label)
+            names.append(name)
+            col_units.append(unit)
+    if units_line is not None:
+        row = [u.strip().strip("[]()") for u in _split(units_line[1], delim)]
+        col_units = [u or c for u, c in zip(row, col_units)]
+
+    # time column
+    tcol = None
+    if time_column is None:
+        for k, name in enumerate(names):
+            if name.strip().lower() in _TIME_NAMES:
+                tcol = k
+                break
+    elif time_column is False:
+        tcol = None
+    elif isinstance(time_column, int) and not isinstance(time_column, bool):
+        if not 0 <= time_column < n_fields:
+            raise ParameterError(
+                f"read({path}): time_column={time_column} out of range; the file has "
+                f"{n_fields} columns"
+            )
+        tcol = time_column
+    else:
+        if time_column not in names:
+            raise ParameterError(
+                f"read({path}): time_column={time_column!r} not among the columns {names}"
+            )
+        tcol = names.index(time_column)
+    ch_cols = [k for k in range(n_fields) if k != tcol]
+    n_ch = len(ch_cols)
+    if channels is not None:
+        ch_names = [str(c) for c in _per_channel_option(channels, n_ch, "channels")]
+        if raw_names is None:
+            names = ["time"] * (tcol is not None) + ch_names
+            col_units = [None] * n_fields
+    else:
+        ch_names = [names[k] for k in ch_cols]
+    where = f", line {header_line_no}" if header_line_no else ""
+    seen: dict[str, int] = {}
+    for k, name in zip(ch_cols, ch_names):
+        if not name:
+            raise FormatError(f"{path}{where}: column {k + 1} has an empty name; expected a name")
+        if name in seen:
+            raise FormatError(
+                f"{path}{where}: duplicate channel name {name!r} in columns {seen[name] + 1} and "
+                f"{k + 1}; expected unique channel names"
+            )
+        seen[name] = k
+    opt_units = _per_channel_option(units, n_ch, "units")
+    meta_units = per_channel.get("units")
+    ch_units = []
+    for j, k in enumerate(ch_cols):
+        u = opt_units[j] if opt_units is not None else col_units[k] if col_units else None
+        if u is None and meta_units is not None:
+            u = (
+                meta_units[k]
+                if len(meta_units) == n_fields
+                else (meta_units[j] if len(meta_units) == n_ch else None)
+            )
+        if u is None or not str(u).strip():
+            raise FormatError(
+                f"{path}{where}: channel {ch_names[j]!r} (column {k + 1}) has no units; "
+                "expected 'name [unit]' in the header, a units row, or units=[...]"
+            )
+        ch_units.append(normalize_units(str(u)))
+    ch_quantity = _per_channel_option(quantity, n_ch, "quantity")
+    if ch_quantity is None and "quantity" in per_channel:
+        ch_quantity = _pick(per_channel["quantity"], ch_cols, n_fields, path, "quantity")
+    node = per_channel.get("node")
+    if node is not None:
+        node = _pick(node, ch_cols, n_fields, path, "node")
+        try:
+            node = [int(x) for x in node]
+        except ValueError as err:
+            raise FormatError(f"{path}: node row {node}; expected integer node numbers") from err
+    direction = per_channel.get("direction")
+    if direction is not None:
+        direction = _pick(direction, ch_cols, n_fields, path, "direction")
+
+    # numeric block: pandas C parser
+    try:
+        df = pd.read_csv(
+            path,
+            sep=r"\s+" if delim is None else delim,
+            decimal=dec,
+            header=None,
+            skiprows=start,
+            dtype=np.float64,
+            engine="c",
+            na_values=_NA_TOKENS,
+            keep_default_na=False,
+            encoding="latin-1",
+            skip_blank_lines=True,
+        )
+    except (ValueError, pd.errors.ParserError) as err:
+        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+        _diagnose(path, start, delim, dec, all_names, encoding)
+        raise FormatError(f"{path}: data block could not be parsed: {err}") from err
+    if df.shape[1] != n_fields:
+        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+        _diagnose(path, start, delim, dec, all_names, encoding)
+        raise FormatError(
+            f"{path}: data has {df.shape[1]} columns; expected {n_fields} as in the header"
+        )
+    arr = df.to_numpy()
+    del df
+    n_missing = np.zeros(n_fields, dtype=np.int64)
+    nan_cols = np.isnan(arr).any(axis=0)
+    if nan_cols.any():
+        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+        n_missing = _diagnose(path, start, delim, dec, all_names, encoding)
+    t_first_line = start + 1
+    if tcol is not None:
+        tname, tunit = names[tcol], (col_units[tcol] if col_units else None) or "s"
+        scale = _TIME_SCALE.get(tunit.strip().lower())
+        if scale is None:
+            raise FormatError(
+                f"{path}{where}: time column {tname!r} in {tunit!r}; expected s, ms or us"
+            )
+        t = arr[:, tcol] * scale
+        rate = check_time_stamps(t, path, t_first_line)
+        if header_fs is not None and not np.isclose(rate, header_fs, rtol=1e-6):
+            raise FormatError(
+                f"{path}: the time column gives {rate} Hz but the header gives {header_fs} Hz; "
+                "expected the same sampling rate"
+            )
+        if fs is not None and not np.isclose(rate, fs, rtol=1e-6):
+            raise FormatError(f"{path}: the time column gives {rate} Hz but fs={fs} was passed")
+        if t[0] != 0.0:
+            attrs["t0_s"] = float(t[0])
+    else:
+        rate = fs if fs is not None else header_fs
+        if rate is None:
+            raise FormatError(
+                f"{path}: no time column and no sampling-rate header; expected a column named "
+                "'time' or a header line 'sample rate: <Hz>' (or 'dt: <s>'), or pass fs="
+            )
+    if ch_cols == list(range(ch_cols[0], ch_cols[0] + n_ch)):
+        data = arr.T[ch_cols[0] : ch_cols[0] + n_ch]
+    else:
+        data = arr.T[ch_cols]
+    missing = n_missing[ch_cols]
+    if missing.any():
+        listed = ", ".join(f"{ch_names[j]!r}: {int(m)}" for j, m in enumerate(missing) if m)
+        warnings.warn(
+            f"{path}: samples marked missing in the file are kept as NaN ({listed}); see "
+            "the 'n_missing' coordinate",
+            MvtkWarning,
+            stacklevel=3,
+        )
+    da = time_history(
+        data,
+        rate,
+        ch_names,
+        ch_units,
+        ch_quantity,
+        node=node,
+        direction=direction,
+        attrs=clean_attrs(attrs),
+        n_missing=missing,
+    )
+    return assemble([da])
+
+
+def _pick(values: list[str], ch_cols: list[int], n_fields: int, path: Path, what: str):
+    if len(values) == n_fields:
+        return [values[k] for k in ch_cols]
+    if len(values) == len(ch_cols):
+        return values
+    raise FormatError(
+        f"{path}: the {what} header row has {len(values)} entries; expected {len(ch_cols)} "
+        f"(one per channel) or {n_fields} (one per column)"
+    )
+
+
+def _looks_like_units(fields: list[str]) -> bool:
+    """True when every non-empty field of a header row reads as a unit."""
+    from ._model import UNITS_BY_QUANTITY
+
+    known = {u for group in UNITS_BY_QUANTITY.values() for u in group} | set(_TIME_SCALE)
+    ok = 0
+    for f in fields:
+        f = f.strip().strip("[]()")
+        if not f:
+            continue
+        if normalize_units(f) not in known and "/" not in f and "^" not in f:
+            return False
+        ok += 1
+    return ok > 0
