@@ -49,8 +49,10 @@ def resolve_retained(
     model : FEModel
     retained : iterable, optional
         Items, each a node index (int), a node set name (str) or a point ``[x, y, z]``
-        in m (its nearest node). All *free* DOFs of those nodes are retained; fully
-        constrained nodes (e.g. a clamp) contribute nothing.
+        in m (its nearest node); a single int or str is one item. A point must be an
+        item of the iterable: ``[[0.18, 0.0, 0.0]]``, not ``[0.18, 0.0, 0.0]``. All
+        *free* DOFs of those nodes are retained; fully constrained nodes (e.g. a clamp)
+        contribute nothing.
     retained_dofs : iterable of int, optional
         Explicit free-DOF indices (rows of ``model.K``), added to the above.
 
@@ -70,7 +72,7 @@ def resolve_retained(
     parts: list[np.ndarray] = []
     nodes: list[np.ndarray] = []
     if retained is not None:
-        if isinstance(retained, (str, int, np.integer)) or _is_point(retained):
+        if isinstance(retained, (str, int, np.integer)):
             retained = [retained]
         for item in retained:
             item_nodes = _nodes_of(model, item)
