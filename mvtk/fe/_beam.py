@@ -166,7 +166,9 @@ def _check_layers(layers: Sequence[Ply], where: str) -> tuple[Ply, ...]:
     return layers
 
 
-def beam_section(layers: Sequence[Ply], width: float) -> BeamSection:
+def beam_section(
+    layers: Sequence[Ply], width: float, shear_correction: float = SHEAR_CORRECTION
+) -> BeamSection:
     """Section properties of a stack of plies of equal width, bottom to top.
 
     Parameters
@@ -175,6 +177,8 @@ def beam_section(layers: Sequence[Ply], width: float) -> BeamSection:
         Layers from the bottom (z = 0) to the top, all of width ``width``.
     width : float
         Section width along y, m.
+    shear_correction : float
+        Shear correction factor k applied to both shear areas (default 5/6).
 
     Returns
     -------
@@ -198,8 +202,8 @@ def beam_section(layers: Sequence[Ply], width: float) -> BeamSection:
       about the shear-modulus-weighted centroid. For one isotropic layer this is the
       classical ``G J``; for a thin strip ``J -> b t^3 (1 - 0.630 t/b) / 3``.
     - Shear: ``kGAz = k sum G_xz,k b t_k`` and ``kGAy = k sum G_xy,k b t_k`` with
-      ``k = 5/6`` (first-order shear deformation with the Reissner factor; the exact
-      layered shear factor is not computed).
+      ``k = shear_correction`` (default 5/6, the Reissner factor of first-order shear
+      deformation; the exact layered shear factor is not computed).
     - Inertia: ``rhoA = sum rho_k b t_k``, ``rhoIy = sum rho_k b int (z - z_n)^2 dz``,
       ``rhoIz = sum rho_k t_k b^3 / 12``.
     """
@@ -226,8 +230,13 @@ def beam_section(layers: Sequence[Ply], width: float) -> BeamSection:
     h = float(z1[-1])
     g_eff = 12.0 * d66 / h**3
     GJ = g_eff * _rect_torsion_factor(b, h)
-    kGAz = SHEAR_CORRECTION * float(np.sum(g_xz * t)) * b
-    kGAy = SHEAR_CORRECTION * float(np.sum(g_xy * t)) * b
+    k = float(shear_correction)
+    if not (np.isfinite(k) and 0 < k <= 1):
+        raise ParameterError(
+            f"beam_section: shear_correction must be in (0, 1], got {shear_correction!r}"
+        )
+    kGAz = k * float(np.sum(g_xz * t)) * b
+    kGAy = k * float(np.sum(g_xy * t)) * b
     rhoA = float(np.sum(rho * t) * b)
     rhoIy = float(np.sum(rho * second) * b)
     rhoIz = float(np.sum(rho * t) * b**3 / 12.0)
@@ -466,27 +475,43 @@ def _mesh_x(length: float, n_elements: int, breaks: np.ndarray) -> np.ndarray:
     return np.concatenate(xs)
 
 
-def _clamp_springs(clamp_stiffness) -> dict[int, float] | None:
-    if clamp_stiffness is None:
+def _clamp_springs(clamp_stiffness, clamp_translational_stiffness) -> dict[int, float] | None:
+    if clamp_stiffness is None and clamp_translational_stiffness is None:
         return None
+    out: dict[int, float] = {}
     if isinstance(clamp_stiffness, Mapping):
-        out = {}
         for key, v in clamp_stiffness.items():
             if key not in DOF_NAMES:
                 raise ParameterError(
                     f"clamp_stiffness: unknown component {key!r}; expected one of {DOF_NAMES}"
                 )
-            out[DOF_NAMES.index(key)] = float(v)
-    else:
-        v = float(clamp_stiffness)
-        out = {3: v, 4: v, 5: v}
+            out[DOF_NAMES.index(key)] = v
+    elif clamp_stiffness is not None:
+        out[DOF_NAMES.index("ry")] = clamp_stiffness
+    if clamp_translational_stiffness is not None:
+        out[DOF_NAMES.index("uz")] = clamp_translational_stiffness
     for c, v in out.items():
+        try:
+            v = float(v)
+        except (TypeError, ValueError):
+            v = float("nan")
         if not (np.isfinite(v) and v > 0):
             raise ParameterError(
-                f"clamp_stiffness[{DOF_NAMES[c]!r}] must be a positive stiffness "
-                f"(N/m or N m/rad), got {v!r}"
+                f"clamp stiffness of {DOF_NAMES[c]!r} must be a positive stiffness "
+                f"(N/m or N m/rad), got {out[c]!r}"
             )
+        out[c] = v
     return out
+
+
+def _point_x(key: str, value) -> float:
+    """x of a named point given as x or (x, y[, z]) (y, z ignored for a beam)."""
+    v = np.atleast_1d(np.asarray(value, dtype=float))
+    if v.ndim != 1 or not 1 <= v.size <= 3:
+        raise ParameterError(
+            f"point {key!r}: expected x or (x, y[, z]) in m, got {value!r}"
+        )
+    return float(v[0])
 
 
 def cantilever_beam(
@@ -497,8 +522,11 @@ def cantilever_beam(
     patches: Sequence[BeamPatch | Mapping] = (),
     clamp: str | None = "x0",
     clamp_stiffness: float | Mapping[str, float] | None = None,
+    clamp_translational_stiffness: float | None = None,
     points: Mapping[str, float] | None = None,
+    shear_correction: float = SHEAR_CORRECTION,
     name: str = "",
+    meta: Mapping | None = None,
 ) -> FEModel:
     """Layered Timoshenko beam along x, width along y, thickness along z.
 
@@ -519,15 +547,24 @@ def cantilever_beam(
     clamp : {"x0", "x1", None}
         Clamped end; ``None`` (or ``"free"``) gives a free-free beam (6 rigid-body modes).
     clamp_stiffness : float or mapping, optional
-        ``None``: the clamp node's six DOFs are removed (rigid clamp). A float ``k``
-        (N m/rad): translations stay fixed, the three rotations are held by springs of
-        stiffness ``k``. A mapping ``{"ry": k, "uz": k2, ...}``: the listed components
-        get springs (N/m or N m/rad), the others stay fixed.
-    points : mapping of str to float, optional
-        Named positions along the beam (m); each becomes a mesh node and a node set
-        ``point:<name>``.
+        ``None`` (and no ``clamp_translational_stiffness``): the clamp node's six DOFs
+        are removed (rigid clamp). A float ``k`` (N m/rad): the bending rotation ``ry``
+        of the clamp node is held by a spring ``k``, its other DOFs stay fixed (the
+        same meaning as the plate's ``clamp_stiffness``, but a total, not per metre of
+        edge). A mapping ``{"ry": k, "uz": k2, ...}``: each listed component gets a
+        spring (N/m or N m/rad), the others stay fixed.
+    clamp_translational_stiffness : float, optional
+        Spring on ``uz`` of the clamp node, N/m (total).
+    points : mapping of str to float or (x, y[, z]), optional
+        Named positions along the beam (m; y and z ignored); each becomes a mesh node and
+        a node set of that name (as in :func:`mvtk.fe.plate_model`). A name may equal a
+        built-in set (``"tip"``) only if it designates the same node.
+    shear_correction : float
+        Shear correction factor of every section (default 5/6).
     name : str
         Model name.
+    meta : mapping, optional
+        Extra entries merged into ``FEModel.meta``.
 
     Returns
     -------
@@ -535,7 +572,8 @@ def cantilever_beam(
         Nodes on the line ``y = z = 0`` (the beam axis, i.e. the neutral axis of each
         segment). ``node_sets``: ``"clamp"`` (absent when free-free), ``"x0"``, ``"x1"``,
         ``"tip"`` (the end opposite the clamp, ``"x1"`` when free-free),
-        ``patch:<name>:x0``, ``patch:<name>:x1``, ``point:<name>``, ``"all"``.
+        ``patch:<name>:x0``, ``patch:<name>:x1``, ``patch:<name>`` (every node of the
+        patch), one set per named point, ``"all"``.
         ``elements["beam2"]`` is the (n_el, 2) connectivity. ``meta`` holds
         ``"kind"``, ``"length"``, ``"width"``, ``"sections"`` (list of
         :meth:`BeamSection.as_dict`), ``"element_section"`` (section index per element),
@@ -574,16 +612,18 @@ def cantilever_beam(
             raise ParameterError(
                 f"patch {p.name!r} spans x = {p.x0}..{p.x1} m, outside the beam 0..{L} m"
             )
-    points = dict(points or {})
+    points = {str(k): _point_x(str(k), v) for k, v in (points or {}).items()}
     for key, x in points.items():
-        if not (np.isfinite(float(x)) and 0 <= float(x) <= L):
+        if not (np.isfinite(x) and 0 <= x <= L * (1 + 1e-12)):
             raise ParameterError(f"point {key!r} at x = {x!r} m is outside the beam 0..{L} m")
-    springs = _clamp_springs(clamp_stiffness)
+    springs = _clamp_springs(clamp_stiffness, clamp_translational_stiffness)
     if springs is not None and clamp is None:
-        raise ParameterError("cantilever_beam: clamp_stiffness given but clamp is None (free-free)")
+        raise ParameterError(
+            "cantilever_beam: clamp_stiffness given but clamp is None (free-free)"
+        )
 
     breaks = np.array([p.x0 for p in patches] + [p.x1 for p in patches]
-                      + [float(x) for x in points.values()], dtype=float)
+                      + list(points.values()), dtype=float)
     x = _mesh_x(L, int(n_elements), breaks)
     nn = len(x)
     nodes = np.column_stack([x, np.zeros(nn), np.zeros(nn)])
@@ -602,7 +642,7 @@ def cantilever_beam(
                 p = patches[i]
                 stack = stack + list(p.layers) if p.side == "top" else list(p.layers) + stack
             stacks[key] = len(sections)
-            sections.append(beam_section(stack, width))
+            sections.append(beam_section(stack, width, shear_correction))
         el_sec[e] = stacks[key]
 
     ke, me = beam_element_matrices(nodes[conn[:, 0]], nodes[conn[:, 1]],
@@ -638,17 +678,25 @@ def cantilever_beam(
     else:
         node_sets["tip"] = np.array([nn - 1])
     for p in patches:
-        node_sets[f"patch:{p.name}:x0"] = np.array([nearest(p.x0)])
-        node_sets[f"patch:{p.name}:x1"] = np.array([nearest(p.x1)])
+        i0, i1 = nearest(p.x0), nearest(p.x1)
+        node_sets[f"patch:{p.name}:x0"] = np.array([i0])
+        node_sets[f"patch:{p.name}:x1"] = np.array([i1])
+        node_sets[f"patch:{p.name}"] = np.arange(i0, i1 + 1)
     for key, xv in points.items():
-        node_sets[f"point:{key}"] = np.array([nearest(float(xv))])
+        node = np.array([nearest(xv)])
+        if key in node_sets and not np.array_equal(node_sets[key], node):
+            raise ParameterError(
+                f"point {key!r} at x = {xv} m clashes with the built-in node set {key!r} "
+                f"(node {int(node_sets[key][0])}); choose another name"
+            )
+        node_sets[key] = node
 
     free = np.flatnonzero(~fixed)
     K = K[free][:, free]
     M = M[free][:, free]
     K = ((K + K.T) * 0.5).tocsr()
     M = ((M + M.T) * 0.5).tocsr()
-    meta = {
+    info = {
         "kind": "timoshenko_beam",
         "length": L,
         "width": float(width),
@@ -665,8 +713,11 @@ def cantilever_beam(
             for p in patches
         ],
         "base_layers": [(q.material.name, float(q.thickness), float(q.angle_deg)) for q in base],
+        "shear_correction": float(shear_correction),
+        "points": points,
     }
+    info.update(meta or {})
     return FEModel(
         nodes=nodes, M=M, K=K, dof_node=free // 6, dof_component=free % 6,
-        node_sets=node_sets, elements={"beam2": conn}, name=name or "cantilever_beam", meta=meta,
+        node_sets=node_sets, elements={"beam2": conn}, name=name or "cantilever_beam", meta=info,
     )

@@ -208,6 +208,24 @@ def test_clamp_rotational_spring_adds_rigid_rotation_deflection():
         model.dof_index(clamp, "uz")
 
 
+def test_clamp_float_stiffness_is_ry_spring_and_translational_spring_adds_p_over_k():
+    L, b, h, P, kr, kt = 0.2, 0.02, 0.001, 1.0, 50.0, 2e4
+    model = cantilever_beam(L, b, [Ply(STEEL, h)], 8, clamp_stiffness=kr,
+                            clamp_translational_stiffness=kt)
+    s = model.meta["sections"][0]
+    assert model.meta["clamp_stiffness"] == {"ry": kr, "uz": kt}
+    tip = model.node_set("tip")[0]
+    f = np.zeros(model.n_dof)
+    f[model.dof_index(tip, "uz")] = P
+    u = factorize(model.K).solve(f)
+    expected = P * L**3 / (3 * s["EIy"]) + P * L / s["kGAz"] + P * L * L / kr + P / kt
+    assert u[model.dof_index(tip, "uz")] == pytest.approx(expected, rel=1e-10)
+    clamp = model.node_set("clamp")[0]
+    for comp in ("ux", "uy", "rx", "rz"):
+        with pytest.raises(ParameterError, match="constrained"):
+            model.dof_index(clamp, comp)
+
+
 # ---------------------------------------------------------------- vibration
 def test_slender_cantilever_matches_euler_bernoulli():
     L, b, h = 0.2, 0.02, 0.5e-3
@@ -326,7 +344,10 @@ def test_patches_points_and_node_sets():
     x = model.nodes[:, 0]
     assert x[model.node_set("patch:pzt:x0")[0]] == pytest.approx(0.01)
     assert x[model.node_set("patch:pzt:x1")[0]] == pytest.approx(0.06)
-    assert x[model.node_set("point:sensor")[0]] == pytest.approx(0.123)
+    assert x[model.node_set("sensor")[0]] == pytest.approx(0.123)
+    on_patch = x[model.node_set("patch:pzt")]
+    assert on_patch.min() == pytest.approx(0.01) and on_patch.max() == pytest.approx(0.06)
+    assert np.all(np.diff(on_patch) > 0)
     assert x[model.node_set("clamp")[0]] == 0.0
     assert x[model.node_set("tip")[0]] == pytest.approx(0.2)
     assert len(model.meta["sections"]) == 2
@@ -374,7 +395,12 @@ def test_bottom_patch_equals_top_patch_of_a_symmetric_layer():
         ({"layers": [STEEL]}, "must be a mvtk.fe.Ply"),
         ({"points": {"s": 0.5}}, "point 's' at x = 0.5 m is outside"),
         ({"clamp_stiffness": {"rq": 1.0}}, "unknown component 'rq'"),
-        ({"clamp_stiffness": -3.0}, "must be a positive stiffness"),
+        ({"clamp_stiffness": -3.0}, "clamp stiffness of 'ry' must be a positive stiffness"),
+        ({"clamp_stiffness": {"ry": "stiff"}}, "of 'ry' must be a positive stiffness"),
+        ({"clamp_translational_stiffness": 0.0}, "of 'uz' must be a positive stiffness"),
+        ({"points": {"tip": 0.1}}, "clashes with the built-in node set 'tip'"),
+        ({"points": {"s": (0.1, 0.0, 0.0, 1.0)}}, "expected x or \\(x, y\\[, z\\]\\)"),
+        ({"shear_correction": 0.0}, "shear_correction must be in"),
         ({"clamp": None, "clamp_stiffness": 1.0}, "clamp is None"),
         ({"patches": [BeamPatch("p", 0.1, 0.3, (Ply(PZT, 1e-4),))]}, "outside the beam"),
         ({"patches": [BeamPatch("p", 0.0, 0.1, (Ply(PZT, 1e-4),)),

@@ -215,7 +215,7 @@ def test_piezo_bad_input():
 def test_edge_load_bad_input():
     model = cantilever_beam(0.2, 0.02, [Ply(STEEL, T_B)], 4, points={"s": 0.1})
     with pytest.raises(ParameterError, match="component must be one of 'rx', 'ry', 'rz'"):
-        edge_moment_load(model, "point:s", "tip", 1.0, component="uz")
+        edge_moment_load(model, "s", "tip", 1.0, component="uz")
     with pytest.raises(ParameterError, match="no node set 'nope'"):
         edge_moment_load(model, "nope", "tip", 1.0)
     with pytest.raises(ParameterError, match="share node"):
@@ -227,9 +227,9 @@ def test_edge_load_bad_input():
     with pytest.raises(ParameterError, match="has no nodes"):
         edge_moment_load(model, [], "tip", 1.0)
     with pytest.raises(ParameterError, match="must be finite"):
-        edge_moment_load(model, "point:s", "tip", np.nan)
+        edge_moment_load(model, "s", "tip", np.nan)
     with pytest.raises(ParameterError, match="width must be positive"):
-        edge_moment_load(model, "point:s", "tip", 1.0, width=-1.0)
+        edge_moment_load(model, "s", "tip", 1.0, width=-1.0)
     bare = _grid_model([0.0])
     with pytest.raises(ParameterError, match="single node needs its width"):
         edge_moment_load(bare, [0], [1], 1.0)
