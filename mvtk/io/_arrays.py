@@ -146,7 +146,8 @@ def build_from_arrays(
             f"{path}: the file stores no units for channels {names}; expected units=[...] "
             "(one per channel)"
         )
-    variables = [time_history(block, rate, names, units, quantity, attrs=extra)]
+    var_attrs = {"t0_s": extra.pop("t0_s")} if "t0_s" in extra else None
+    variables = [time_history(block, rate, names, units, quantity, attrs=var_attrs)]
     if spectra:
         if frequency is None:
             raise FormatError(f"{path}: spectra given without frequency='<name>' of the axis in Hz")
@@ -168,4 +169,4 @@ def build_from_arrays(
             )
             da.frequency.attrs["units"] = "Hz"
             variables.append(da)
-    return assemble(variables)
+    return assemble(variables, extra)

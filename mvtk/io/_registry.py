@@ -164,6 +164,21 @@ def _check_options(reader: _Reader, options: dict, path: Path) -> None:
         )
 
 
+def _fixed_width_strings(ds: xr.Dataset) -> xr.Dataset:
+    """Object arrays of str become numpy str arrays (what a netCDF round trip gives back)."""
+    changes = {}
+    for name, var in ds.variables.items():
+        if var.dtype == object and all(isinstance(v, str) for v in var.values.ravel()):
+            changes[name] = var.astype(str)
+    return (
+        ds.assign_coords({k: v for k, v in changes.items() if k in ds.coords}).assign(
+            {k: v for k, v in changes.items() if k not in ds.coords}
+        )
+        if changes
+        else ds
+    )
+
+
 def read(path: str | os.PathLike, format: str | None = None, **options) -> xr.Dataset:
     """Read a measurement file into a validated ``xarray.Dataset``.
 
@@ -224,6 +239,12 @@ def read(path: str | os.PathLike, format: str | None = None, **options) -> xr.Da
         raise FormatError(
             f"{path}: reader {format!r} returned {type(ds).__name__}; expected an xarray.Dataset"
         )
+    ds = _fixed_width_strings(ds)
     ds.attrs = clean_attrs({**ds.attrs, "source": str(path), "format": format})
+    for name, var in ds.data_vars.items():
+        if str(name).startswith("time_history"):
+            var.attrs = clean_attrs(
+                {**ds.attrs, **var.attrs, "source": str(path), "format": format}
+            )
     validate(ds)
     return ds

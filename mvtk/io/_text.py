@@ -364,13 +364,14 @@ def read_text(
     # header: metadata lines, column names, units row
     header = [(i, ln) for i, ln in enumerate(lines[:start]) if ln.strip()]
     names_line = units_line = None
-    if header and len(_split(header[-1][1], delim)) == n_fields:
-        last = _split(header[-1][1], delim)
-        prev = _split(header[-2][1], delim) if len(header) > 1 else None
+    table = [h for h in header if (_metadata(h[1], delim) or ("",))[0] not in _CHANNEL_KEYS]
+    if table and len(_split(table[-1][1], delim)) == n_fields:
+        last = _split(table[-1][1], delim)
+        prev = _split(table[-2][1], delim) if len(table) > 1 else None
         if prev is not None and len(prev) == n_fields and _looks_like_units(last):
-            names_line, units_line = header[-2], header[-1]
+            names_line, units_line = table[-2], table[-1]
         else:
-            names_line = header[-1]
+            names_line = table[-1]
     meta_lines = [h for h in header if h not in (names_line, units_line)]
     attrs: dict = {}
     header_fs = None
@@ -392,7 +393,7 @@ def read_text(
             header_fs = rate
         if key in _CHANNEL_KEYS:
             per_channel[_CHANNEL_KEYS[key]] = _split(value, delim if delim else None)
-        attrs[key] = value
+        attrs[f"header_{key}" if key in ("fs", "t0_s", "source", "format") else key] = value
 
     if names_line is not None:
         raw_names = _split(names_line[1], delim)
@@ -567,10 +568,10 @@ def read_text(
         ch_quantity,
         node=node,
         direction=direction,
-        attrs=clean_attrs(attrs),
+        attrs={"t0_s": attrs.pop("t0_s")} if "t0_s" in attrs else None,
         n_missing=missing,
     )
-    return assemble([da])
+    return assemble([da], clean_attrs(attrs))
 
 
 def _pick(values: list[str], ch_cols: list[int], n_fields: int, path: Path, what: str):
