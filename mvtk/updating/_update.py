@@ -17,7 +17,13 @@ from ..fe._model import FEModel
 from ..fe._solvers import eigsh_lowest
 from ._pairing import Pairing, classify_modes, pair_modes, target_mac
 from ._parameters import Parameter, with_values
-from ._sensitivity import check_model, d_omega2, same_dofs
+from ._sensitivity import (
+    check_difference,
+    check_model,
+    d_omega2,
+    matrix_derivative,
+    same_dofs,
+)
 from ._targets import FrequencyTarget
 
 __all__ = ["update", "UpdateResult", "HistoryEntry"]
@@ -80,7 +86,7 @@ class _Problem:
     """Residuals and Jacobian in scaled variables x = p / scale."""
 
     def __init__(self, description, params, targets, builder, n_modes, weights, mac_weight,
-                 regularization, mode_classifier, rel_step):
+                 regularization, mode_classifier, rel_step, difference):
         self.description = description
         self.params = params
         self.targets = targets
@@ -91,6 +97,7 @@ class _Problem:
         self.reg = regularization
         self.classifier = mode_classifier
         self.rel_step = rel_step
+        self.difference = difference
         resolved = [p.resolve(description) for p in params]
         self.initial = np.array([v for v, _ in resolved])
         self.scale = np.array([s for _, s in resolved])
@@ -218,12 +225,14 @@ class _Problem:
             h = self.rel_step * self.scale[j]
             if base_vals[j] + h > p.upper:
                 h = -h
-            pert_desc = with_values(base_desc, {p.path: float(base_vals[j] + h)})
-            pert = self.build(pert_desc)
+            steps = (h, -h) if self.difference == "central" else (h,)
+            built = [self.build(with_values(base_desc, {p.path: float(base_vals[j] + s)}))
+                     for s in steps]
+            pert = built[0]
             pert_eig = None
-            if same_dofs(st.model, pert):
-                dw2[:, k] = d_omega2(w2, phi, (pert.K - st.model.K) / h,
-                                     (pert.M - st.model.M) / h)
+            if all(same_dofs(st.model, b) for b in built):
+                dK, dM = matrix_derivative(st.model, built, h)
+                dw2[:, k] = d_omega2(w2, phi, dK, dM)
             else:
                 # the mesh changed: finite differences of the eigenvalues, modes tracked
                 # by index (documented limitation)
@@ -568,6 +577,7 @@ def update(
     frequency_std: float | None = None,
     identifiability_tol: float = 1e-3,
     rel_step: float = 1e-6,
+    difference: str = "central",
     xtol: float = 1e-10,
     ftol: float = 1e-12,
 ) -> UpdateResult:
@@ -585,11 +595,11 @@ def update(
     in scaled variables ``x = p / scale``. Modes are re-paired at every evaluation (MAC +
     Hungarian when shapes exist, else by order and mode type; see :func:`pair_modes`).
     The Jacobian is analytic: ``d(omega^2)/dp = phi'(dK/dp - omega^2 dM/dp) phi`` with
-    ``dK/dp``, ``dM/dp`` forward differences of the assembled matrices (one extra build
-    per free parameter per iteration). MAC derivatives (only with ``mac_weight > 0``)
-    use one extra eigen solve per parameter. If a perturbed build changes the DOF map,
-    that parameter falls back to finite differences of the eigenvalues (modes tracked
-    by index).
+    ``dK/dp``, ``dM/dp`` finite differences of the assembled matrices (two extra builds
+    per free parameter per iteration, one with ``difference="forward"``). MAC
+    derivatives (only with ``mac_weight > 0``) use one extra eigen solve per parameter.
+    If a perturbed build changes the DOF map, that parameter falls back to finite
+    differences of the eigenvalues (modes tracked by index).
 
     Parameters
     ----------
@@ -624,6 +634,10 @@ def update(
         :class:`~mvtk.errors.IdentifiabilityWarning` is issued.
     rel_step : float
         Finite-difference step relative to each parameter's scale.
+    difference : {"central", "forward"}
+        Scheme for dK/dp, dM/dp: central (two builds per free parameter per
+        iteration, accurate for geometry) or forward (one build; exact for parameters
+        entering the matrices linearly such as moduli, densities, springs).
     xtol, ftol : float
         Stopping tolerances of least_squares.
 
@@ -661,10 +675,11 @@ def update(
         isinstance(frequency_std, int | float) and frequency_std > 0
     ):
         raise ParameterError(f"frequency_std must be a positive number, got {frequency_std!r}")
+    check_difference(difference)
     if builder is None:
         builder = _default_builder()
     prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),
-                    float(regularization), mode_classifier, rel_step)
+                    float(regularization), mode_classifier, rel_step, difference)
     free = prob.free
     lb = np.array([p.lower for p in params])[free] / prob.scale[free]
     ub = np.array([p.upper for p in params])[free] / prob.scale[free]
