@@ -8,29 +8,33 @@ The "truth" structure
 The paper (Ghareeb & Schmidt, smart beam; see ``/work/shared/PHYSICS.md`` section 1)
 measured f1 = 13.26 Hz and f2 = 41.14 Hz with Rayleigh damping identified from
 zeta1 = 5.84e-4 and zeta2 = 1.32e-3 (alpha = 0.02955 1/s, beta = 9.77e-6 s). The truth
-structure of this script is a clamped steel strip with a smeared PZT patch that
-reproduces those two measured frequencies exactly. It *differs from the nominal model*
-of ``data/smart_beam/study.toml`` in the ways a real specimen differs from its drawing:
+structure of this script has exactly those two frequencies and that damping. It differs
+from the nominal model ``data/structures/smart_beam.toml`` (ideal clamp, steel
+E = 210 GPa: 14.25 / 42.18 Hz) the way a real specimen differs from its drawing:
 
-- the steel modulus is 200 GPa in the truth, 210 GPa nominal (paper Table 1);
-- the clamp is compliant in the truth (the nominal model is perfectly clamped), which
-  lowers the bending frequencies more than the torsion ones;
-- the higher modes are those of the truth (bending 2 near 83 Hz, torsion 2 near
-  123 Hz) which the paper does not list.
+- the clamp is compliant: with the nominal mvtk FE model, a rotational clamp stiffness
+  of 383 N m/rad per metre of clamped edge together with a steel modulus of 212.6 GPa
+  (+1.2 %) reproduces 13.26 / 41.14 Hz to 1e-8 (least squares on
+  ``boundary.clamp_stiffness`` and ``materials.steel.E`` with :func:`mvtk.fe.build_model`;
+  an ideal clamp cannot: with any E, f2/f1 stays 2.96 instead of 3.10). These two
+  numbers are what the study's model updating should find;
+- the higher modes are those of a uniform strip (bending 2 near 83 Hz, torsion 2 near
+  123 Hz), above the anti-aliasing cut-off of the files.
 
-Because the truth is defined by its modal parameters, the response is computed by modal
-superposition of the modes listed in :data:`TRUTH_MODES`: for mode i, natural
-frequency ``fn_hz``, damping ratio from the paper's Rayleigh pair, and the
-mass-normalised mode-shape values at the impact point and at the sensor
-(``phi_force``, ``phi_sensor`` in 1/sqrt(kg)). The shape values come from cantilever
-beam functions (bending) and a linear-in-width, quarter-sine-in-length torsion shape
-over a strip of 180 mm x 133 mm with 4.0 kg/m^2 (0.5 mm steel plus the smeared patch).
-To switch to an FE truth model later, replace :func:`truth_modes` by one that returns
-the same table from ``mvtk.fe.modal_analysis``.
+The response is computed by modal superposition of the modes listed by
+:func:`truth_modes`: for mode i, natural frequency ``fn_hz``, damping ratio from the
+paper's Rayleigh pair, and the mass-normalised mode-shape values at the impact point and
+at the sensor (``phi_force``, ``phi_sensor`` in 1/sqrt(kg)). The shape values come from
+cantilever beam functions (bending) and a linear-in-width, quarter-sine-in-length torsion
+shape over a strip of 180 mm x 133 mm with 4.0 kg/m^2 (0.5 mm steel plus the smeared
+patch); they set amplitudes, not frequencies or damping. To use an FE truth model
+instead, replace :func:`truth_modes` by one that returns the same table from
+``mvtk.fe.modal_analysis``.
 
 The two tests
 -------------
-1. Impact test (``SYNTHETIC_smart_beam_impact.*``): 3 hammer hits 128 s apart (a
+1. Impact test (``SYNTHETIC_smart_beam_impact.*``): 3 hammer hits 128 s apart (the
+   first at 2 s, 388 s in all) (a
    half-sine pulse of 1.5 ms and about 5 N at (170, 110) mm), force and tip
    acceleration at (180, 20) mm, simulated at 2048 Hz, with sensor noise, an 8th-order
    Butterworth anti-aliasing filter at 50 Hz applied to both channels (like a DAQ's
@@ -159,13 +163,13 @@ def _anti_alias_and_decimate(x: np.ndarray) -> np.ndarray:
 def impact_test(rng: np.random.Generator, modes: list[Mode], n_hits: int = 3,
                 record_s: float = 128.0):
     """Force (N) and tip acceleration (m/s^2) at FS_OUT, SYNTHETIC."""
-    n = int(round(n_hits * record_s * FS_SIM))
+    n = int(round((n_hits * record_s + 4.0) * FS_SIM))
     dt = 1.0 / FS_SIM
     force = np.zeros(n)
     pulse_t = np.arange(int(round(1.5e-3 * FS_SIM)) + 1) * dt
     hit_times = []
     for k in range(n_hits):
-        t0 = k * record_s + 1.0 + rng.uniform(-0.05, 0.05)
+        t0 = k * record_s + 2.0 + rng.uniform(-0.05, 0.05)
         i0 = int(round(t0 * FS_SIM))
         amp = 5.0 * rng.uniform(0.8, 1.2)
         force[i0:i0 + pulse_t.size] += amp * np.sin(np.pi * pulse_t / pulse_t[-1])
@@ -210,12 +214,16 @@ def free_decay(rng: np.random.Generator, modes: list[Mode], duration_s: float = 
     return (_anti_alias_and_decimate(disp_meas)[n0:], _anti_alias_and_decimate(acc_meas)[n0:])
 
 
-def _csv(path: Path, header: list[str], columns: dict[str, np.ndarray]) -> None:
+def _csv(path: Path, header: list[str], columns: dict[str, np.ndarray],
+         quantity: list[str], node: list[int]) -> None:
+    """CSV: '#' metadata lines, per-channel quantity/node rows, 'name [unit]' header."""
     n = len(next(iter(columns.values())))
     time = np.arange(n) / FS_OUT
     data = np.column_stack([time, *columns.values()])
     lines = [f"# {h}" for h in header]
-    lines.append(",".join(["time_s", *columns]))
+    lines.append("# quantity: " + ", ".join(quantity))
+    lines.append("# node: " + ", ".join(str(k) for k in node))
+    lines.append(",".join(["time [s]", *columns]))
     with path.open("w", encoding="utf-8", newline="\n") as fh:
         fh.write("\n".join(lines) + "\n")
         np.savetxt(fh, data, delimiter=",", fmt=["%.7f"] + ["%.5e"] * len(columns))
@@ -264,7 +272,7 @@ def main(out_dir: Path) -> list[Path]:
     common = [
         "SYNTHETIC DATA - simulated, not measured (mvtk example files)",
         f"generator: data/make_smart_beam_data.py, seed {SEED}",
-        "structure: truth smart beam (steel E 200 GPa, compliant clamp), see script docstring",
+        "structure: truth smart beam (compliant clamp, steel E 212.6 GPa), see script docstring",
         f"sampling_rate_hz: {FS_OUT:g}",
         f"anti_alias: Butterworth order {AA_ORDER}, {AA_CUTOFF_HZ:g} Hz, both channels",
         "truth modes: " + "; ".join(f"{m.name} {m.fn_hz:.3f} Hz zeta {m.zeta:.3e}"
@@ -274,15 +282,16 @@ def main(out_dir: Path) -> list[Path]:
     p = out_dir / "SYNTHETIC_smart_beam_impact.csv"
     _csv(p, ["SYNTHETIC impact test: 3 hammer hits, records of 128 s", *common,
              "hit_times_s: " + " ".join(f"{h:.4f}" for h in hits),
-             "channels: force_N (node 1, impact at x=170 mm y=110 mm, +z), "
-             "accel_m_s2 (node 5, tip sensor at x=180 mm y=20 mm, +z)"],
-         {"force_N": force, "accel_m_s2": acc})
+             "channels: force (node 1, impact at x=170 mm y=110 mm, +z), "
+             "tip_accel (node 5, tip sensor at x=180 mm y=20 mm, +z)"],
+         {"force [N]": force, "tip_accel [m/s^2]": acc}, ["force", "acceleration"], [1, 5])
     written.append(p)
     p = out_dir / "SYNTHETIC_smart_beam_decay.csv"
     _csv(p, ["SYNTHETIC free decay from mode 1 (release at t = 0)", *common,
-             "channels: tip_disp_m (laser on tip centre x=180 mm y=66.5 mm, +z), "
-             "accel_m_s2 (node 5, x=180 mm y=20 mm, +z)"],
-         {"tip_disp_m": disp_d, "accel_m_s2": acc_d})
+             "channels: tip_disp (node 6, laser on tip centre x=180 mm y=66.5 mm, +z), "
+             "tip_accel (node 5, x=180 mm y=20 mm, +z)"],
+         {"tip_disp [m]": disp_d, "tip_accel [m/s^2]": acc_d}, ["displacement", "acceleration"],
+         [6, 5])
     written.append(p)
     p = out_dir / "SYNTHETIC_smart_beam_impact.uff"
     _uff(p, "impact test", [
