@@ -271,18 +271,19 @@ def check_time_stamps(t: np.ndarray, path: Path, first_line: int, unit: str = "l
     if np.any(d <= 0):
         i = int(np.flatnonzero(d <= 0)[0]) + 1
         raise FormatError(
-            f"{path}, {unit} {first_line + i}: time {t[i]!r} s is not after the previous "
-            f"{t[i - 1]!r} s; expected strictly increasing time stamps"
+            f"{path}, {unit} {first_line + i}: time {t[i].item()!r} s is not after the previous "
+            f"{t[i - 1].item()!r} s; expected strictly increasing time stamps"
         )
-    dt = (t[-1] - t[0]) / (n - 1)
+    dt = np.median(d)
     bad = np.flatnonzero(np.abs(d - dt) > 0.01 * dt)
     if bad.size:
         i = int(bad[0]) + 1
         raise FormatError(
-            f"{path}, {unit} {first_line + i}: time step {d[i - 1]!r} s before time {t[i]!r} s; "
-            f"expected a uniform step of {dt!r} s (within 1 %); non-uniform sampling"
+            f"{path}, {unit} {first_line + i}: time step {d[i - 1].item()!r} s before time "
+            f"{t[i].item()!r} s; "
+            f"expected a uniform step of {dt.item()!r} s (within 1 %); non-uniform sampling"
         )
-    return fs_from_dt(dt)
+    return fs_from_dt((t[-1] - t[0]) / (n - 1))
 
 
 def _per_channel_option(value, n: int, name: str):

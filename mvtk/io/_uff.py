@@ -97,7 +97,7 @@ def _check_points(rec: dict, path: Path, index: int, allow_truncated: bool) -> n
     if not np.all(np.isfinite(data)):
         i = int(np.flatnonzero(~np.isfinite(data))[0])
         raise FormatError(
-            f"{path}, record {index}: value {i} is {data[i]!r}; expected finite values"
+            f"{path}, record {index}: value {i} is {data[i].item()!r}; expected finite values"
         )
     return data
 

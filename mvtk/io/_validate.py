@@ -44,7 +44,7 @@ def _check_time(da: xr.DataArray, tdim: str, label: str, where: str) -> None:
         i = int(bad[0])
         raise FormatError(
             f"{label}{where}: time axis is not np.arange(n) / fs with fs = {fs:.10g} Hz; "
-            f"sample {i} is at {t[i]!r} s, expected {expected[i]!r} s"
+            f"sample {i} is at {t[i].item()!r} s, expected {expected[i].item()!r} s"
         )
 
 
@@ -127,8 +127,9 @@ def _validate_spectrum(da: xr.DataArray, label: str, where: str) -> None:
     if f.size > 1 and not np.all(np.diff(f) > 0):
         i = int(np.flatnonzero(np.diff(f) <= 0)[0]) + 1
         raise FormatError(
-            f"{label}{where}: '{fdim}' must increase strictly; line {i} is at {f[i]!r} Hz after "
-            f"{f[i - 1]!r} Hz"
+            f"{label}{where}: '{fdim}' must increase strictly; line {i} is at "
+            f"{f[i].item()!r} Hz after "
+            f"{f[i - 1].item()!r} Hz"
         )
     values = np.asarray(da.values)
     if not np.all(np.isfinite(values)):

@@ -1,0 +1,240 @@
+"""CSV / TSV / text exports: layouts that must read, and every bad-input path."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+import xarray as xr
+
+import mvtk.io as mio
+from mvtk.errors import FormatError, MvtkWarning, ParameterError, UnsupportedFormatError
+
+
+def _write(tmp_path, name, text, encoding="utf-8"):
+    path = tmp_path / name
+    path.write_bytes(text.encode(encoding) if isinstance(text, str) else text)
+    return path
+
+
+GOOD = """# Instrument: DAQ-9
+# Operator = J. Doe
+Sample rate: 1 kHz
+Time [s],acc1 [m/s2],F (N)
+0.000,0.1,1
+0.001,0.2,2
+0.002,0.3,3
+0.003,0.4,4
+"""
+
+
+def test_csv_with_metadata_time_and_units(tmp_path):
+    ds = mio.read(_write(tmp_path, "a.csv", GOOD))
+    th = ds["time_history"]
+    assert list(th.channel.values) == ["acc1", "F"]
+    assert list(th.units.values) == ["m/s^2", "N"]
+    assert list(th.quantity.values) == ["acceleration", "force"]
+    assert th.attrs["fs"] == 1000.0
+    np.testing.assert_array_equal(th.time.values, np.arange(4) / 1000.0)
+    np.testing.assert_array_equal(th.values, [[0.1, 0.2, 0.3, 0.4], [1, 2, 3, 4]])
+    assert ds.attrs["instrument"] == "DAQ-9" and ds.attrs["operator"] == "J. Doe"
+    assert th.attrs["source"].endswith("a.csv") and ds.attrs["format"] == "text"
+
+
+def test_values_match_pandas(tmp_path, rng):
+    data = rng.standard_normal((500, 3))
+    df = pd.DataFrame(data, columns=["a [V]", "b [V]", "c [N]"])
+    path = tmp_path / "r.csv"
+    df.to_csv(path, index=False, float_format="%.17g")
+    with open(path) as fh:
+        body = fh.read()
+    path.write_text("fs: 2048\n" + body)
+    th = mio.read(path)["time_history"]
+    np.testing.assert_array_equal(th.values, data.T)
+    assert th.attrs["fs"] == 2048.0
+
+
+def test_tsv_decimal_comma_units_row(tmp_path):
+    text = "Zeit\tacc\tF\n[s]\t[g]\t[kN]\n0,0\t1,5\t2\n0,5\t2,5\t3\n1,0\t3,5\t4\n"
+    th = mio.read(_write(tmp_path, "b.tsv", text))["time_history"]
+    assert list(th.units.values) == ["g", "kN"]
+    assert th.attrs["fs"] == 2.0
+    np.testing.assert_array_equal(th.values[0], [1.5, 2.5, 3.5])
+
+
+def test_semicolon_decimal_comma_and_labelled_rows(tmp_path):
+    text = "dt;0,5 ms\nnode;3;4\ndirection;z;-y\nunits;m/s^2;N\nacc1;acc2\n1,5;2\n2,5;3\n"
+    th = mio.read(_write(tmp_path, "c.csv", text))["time_history"]
+    assert th.attrs["fs"] == 2000.0
+    assert list(th.node.values) == [3, 4] and list(th.direction.values) == ["z", "-y"]
+    np.testing.assert_array_equal(th.values, [[1.5, 2.5], [2.0, 3.0]])
+
+
+def test_whitespace_delimited_with_ms_time(tmp_path):
+    text = "t(ms)  v(mm/s)\n0   1\n2   2\n4   3\n"
+    th = mio.read(_write(tmp_path, "d.txt", text))["time_history"]
+    assert th.attrs["fs"] == 500.0 and th.units.item() == "mm/s"
+    assert th.quantity.item() == "velocity"
+
+
+def test_options_override_header(tmp_path):
+    text = "0.1,1\n0.2,2\n0.3,3\n"
+    th = mio.read(_write(tmp_path, "e.csv", text), fs=10.0, channels=["a", "b"], units=["V", "Pa"])[
+        "time_history"
+    ]
+    assert list(th.channel.values) == ["a", "b"] and th.attrs["fs"] == 10.0
+
+
+def test_time_offset_kept_in_attrs(tmp_path):
+    text = "time [s],x [m]\n1.0,0\n1.5,1\n2.0,2\n"
+    th = mio.read(_write(tmp_path, "f.csv", text))["time_history"]
+    assert th.attrs["t0_s"] == 1.0 and th.time.values[0] == 0.0
+
+
+def test_marked_missing_values_are_reported(tmp_path):
+    text = "time [s],a [V],b [V]\n0,1,NaN\n1,,2\n2,3,4\n"
+    with pytest.warns(MvtkWarning, match=r"kept as NaN \('a': 1, 'b': 1\)"):
+        th = mio.read(_write(tmp_path, "g.csv", text))["time_history"]
+    assert list(th.n_missing.values) == [1, 1]
+    assert np.isnan(th.values).sum() == 2
+    mio.validate(th)
+
+
+def test_round_trip_text(tmp_path):
+    first = mio.read(_write(tmp_path, "a.csv", GOOD))
+    second = mio.read(mio.write(first, tmp_path / "a.nc"))
+    for ds in (first, second):
+        for obj in [ds, *ds.data_vars.values()]:
+            obj.attrs.pop("source"), obj.attrs.pop("format")
+    xr.testing.assert_identical(first, second)
+
+
+# ---------------------------------------------------------------- bad input
+
+
+@pytest.mark.parametrize(
+    ("text", "match"),
+    [
+        (
+            "time [s],a [V],b [V]\n0,1,2\n1,2,3\n2,3\n3,4,5\n",
+            r"r.csv, line 4: 2 fields; expected 3 \(time, a, b\) as in the header \(ragged row\)",
+        ),
+        (
+            "time [s],a [V],b [V]\n0,1,2\n1,2,3\n2,3,4,5\n3,4,5\n",
+            r"r.csv, line 4: 4 fields; expected 3",
+        ),
+        (
+            "time [s],a [V]\n0,1\n1,2\n2,abc\n3,4\n",
+            r"r.csv, line 4, column 2 \('a'\): 'abc' is not a number",
+        ),
+        (
+            "time [s],a [V]\n0,1\n1,2\n0.5,3\n3,4\n",
+            r"r.csv, line 4: time 0.5 s is not after the previous 1.0 s; expected strictly",
+        ),
+        (
+            "time [s],a [V]\n0,1\n1,2\n2,3\n4,4\n5,5\n",
+            r"r.csv, line 5: time step 2.0 s before time 4.0 s; expected a uniform step",
+        ),
+        (
+            "time [s],a [V],a [V]\n0,1,2\n1,2,3\n",
+            r"r.csv, line 1: duplicate channel name 'a' in columns 2 and 3",
+        ),
+        (
+            "time [s],a,b [V]\n0,1,2\n1,2,3\n",
+            r"r.csv, line 1: channel 'a' \(column 2\) has no units",
+        ),
+        (
+            "a [V],b [V]\n1,2\n2,3\n",
+            r"no time column and no sampling-rate header; expected a column named 'time'",
+        ),
+        ("1,2\n2,3\n", r"no column-name line before the data at line 1"),
+        ("time [s],a [V]\n", r"no numeric data lines found"),
+        ("   \n\n", r"holds no data"),
+        (
+            "Sample rate: fast\ntime [s],a [V]\n0,1\n1,2\n",
+            r"line 1: sample_rate = 'fast' is not a number",
+        ),
+        (
+            "fs: 100\ntime [s],a [V]\n0,1\n1,2\n",
+            r"the time column gives 1.0 Hz but the header gives 100.0 Hz",
+        ),
+        ("time [h],a [V]\n0,1\n1,2\n", r"time column 'time' in 'h'; expected s, ms or us"),
+        ("time [s],a [V]\n0,1\n", r"one data line only"),
+        ("node: 1,2,3\ntime [s],a [V]\n0,1\n1,2\n", r"the node header row has 3 entries"),
+    ],
+    ids=[
+        "short-row",
+        "long-row",
+        "non-numeric",
+        "non-monotonic",
+        "non-uniform",
+        "duplicate",
+        "missing-units",
+        "no-rate",
+        "no-header",
+        "no-data",
+        "blank",
+        "bad-rate",
+        "rate-mismatch",
+        "time-unit",
+        "one-line",
+        "bad-node-row",
+    ],
+)
+def test_bad_csv(tmp_path, text, match):
+    with pytest.raises(FormatError, match=match):
+        mio.read(_write(tmp_path, "r.csv", text))
+
+
+def test_non_utf8_header(tmp_path):
+    raw = "time [s],acc [m/s²]\n0,1\n1,2\n".encode("latin-1")
+    path = _write(tmp_path, "l.csv", raw)
+    with pytest.raises(
+        FormatError, match=r"l.csv, line 1: byte b'\\xb2' at column 18 is not valid utf-8"
+    ):
+        mio.read(path)
+    th = mio.read(path, encoding="latin-1")["time_history"]
+    assert th.units.item() == "m/s^2"
+
+
+def test_empty_file(tmp_path):
+    path = _write(tmp_path, "empty.csv", b"")
+    with pytest.raises(FormatError, match=r"empty.csv: the file is empty \(0 bytes\)"):
+        mio.read(path)
+
+
+def test_unknown_format(tmp_path):
+    path = _write(tmp_path, "x.bin", bytes(range(256)) * 4)
+    with pytest.raises(UnsupportedFormatError, match=r"x.bin: unknown format \(extension '.bin'"):
+        mio.read(path)
+    with pytest.raises(UnsupportedFormatError, match=r"unknown format 'foo'; expected one of: "):
+        mio.read(path, format="foo")
+
+
+def test_unknown_option(tmp_path):
+    path = _write(tmp_path, "a.csv", GOOD)
+    with pytest.raises(ParameterError, match=r"option\(s\) sampling not understood by the 'text'"):
+        mio.read(path, sampling=3)
+
+
+def test_bad_time_column_option(tmp_path):
+    path = _write(tmp_path, "a.csv", GOOD)
+    with pytest.raises(ParameterError, match=r"time_column='zeit' not among the columns"):
+        mio.read(path, time_column="zeit")
+    with pytest.raises(ParameterError, match=r"time_column=7 out of range"):
+        mio.read(path, time_column=7)
+
+
+def test_missing_file_and_directory(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no such file"):
+        mio.read(tmp_path / "nope.csv")
+    with pytest.raises(FormatError, match="is a directory"):
+        mio.read(tmp_path)
+
+
+def test_no_warning_for_clean_file(tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mio.read(_write(tmp_path, "a.csv", GOOD))
