@@ -139,7 +139,7 @@ def _parse_inputs(model: FEModel, inputs, units):
             raise DimensionError(
                 f"expected {len(vectors)} input units, got {len(unit_list)}"
             )
-    return np.column_stack(vectors), names, unit_list
+    return np.column_stack(vectors), tuple(names), tuple(unit_list)
 
 
 def _parse_outputs(model: FEModel, outputs, units):
@@ -172,7 +172,7 @@ def _parse_outputs(model: FEModel, outputs, units):
         unit_list = list(units)
         if len(unit_list) != len(rows):
             raise DimensionError(f"expected {len(rows)} output units, got {len(unit_list)}")
-    return np.vstack(rows), np.array(quantities), names, unit_list
+    return np.vstack(rows), np.array(quantities), tuple(names), tuple(unit_list)
 
 
 def _modal_damping_diag(zeta, n_kept, n_total, omega):
@@ -189,6 +189,15 @@ def _modal_damping_diag(zeta, n_kept, n_total, omega):
     if np.any(z < 0):
         raise ParameterError(f"damping ratios must be >= 0, got min {z.min()}")
     return 2.0 * z * omega
+
+
+def _check_restrained(w2: np.ndarray, correct: bool) -> None:
+    """Static correction needs K^-1: refuse rigid-body modes (omega^2 ~ 0)."""
+    if correct and w2.size and w2[0] <= 1e-8 * abs(w2[-1]):
+        raise ParameterError(
+            "static correction needs a restrained structure, but a rigid-body mode was "
+            f"found (omega^2 = {w2[0]:.3g} (rad/s)^2); use static_correction=False"
+        )
 
 
 def structural_plant(
@@ -295,7 +304,9 @@ def structural_plant(
             raise ParameterError(f"n_modes must be in 1..{n_total} (SE size), got {n_modes}")
         w2, phi = sla.eigh(se.K, se.M)
         B_r, C_r = se.T.T @ F, Cphys @ se.T
-        if n_kept < n_total and static_correction:
+        correct = n_kept < n_total and static_correction
+        _check_restrained(w2, correct)
+        if correct:
             flex = np.linalg.solve(se.K, B_r)
         w2, phi = w2[:n_kept], phi[:, :n_kept]
     else:
@@ -308,7 +319,9 @@ def structural_plant(
         sol = eigsh_lowest(model.K, model.M, n_kept)
         w2, phi = sol.omega2, sol.vectors
         B_r, C_r = F, Cphys
-        if n_kept < n_total and static_correction:
+        correct = n_kept < n_total and static_correction
+        _check_restrained(w2, correct)
+        if correct:
             flex = factorize(model.K).solve(F)
     omega = np.sqrt(np.clip(w2, 0.0, None))
     Bm, Cm = phi.T @ B_r, C_r @ phi
@@ -317,15 +330,10 @@ def structural_plant(
     else:
         cdiag = alpha + beta * w2
     D = np.zeros((Cm.shape[0], Bm.shape[1]))
-    if n_kept < n_total and static_correction:
-        if np.any(w2 <= 0):
-            raise ParameterError(
-                "static correction needs a restrained structure (rigid-body modes found)"
-            )
+    if correct:
         residual = flex - phi @ (Bm / w2[:, None])
         D[disp] = C_r[disp] @ residual
-    meta.update(fn_hz=omega / (2 * np.pi), n_modes=n_kept, static_correction=bool(
-        static_correction and n_kept < n_total))
+    meta.update(fn_hz=omega / (2 * np.pi), n_modes=n_kept, static_correction=correct)
     return StructuralPlant(
         M=np.eye(n_kept), C=np.diag(cdiag), K=np.diag(w2), B=Bm,
         Cq=np.where(disp[:, None], Cm, 0.0), Cv=np.where(disp[:, None], 0.0, Cm),
