@@ -12,11 +12,17 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import AccuracyWarning, ConfigError, IdentifiabilityWarning, ParameterError
+from ..errors import (
+    AccuracyWarning,
+    ConfigError,
+    IdentifiabilityWarning,
+    MvtkError,
+    ParameterError,
+)
 from ..fe._model import FEModel
 from ..fe._solvers import eigsh_lowest
 from ._pairing import Pairing, classify_modes, pair_modes, target_mac
-from ._parameters import Parameter, with_values
+from ._parameters import Parameter, get_path, with_values
 from ._sensitivity import (
     check_difference,
     check_model,
@@ -130,7 +136,15 @@ class _Problem:
 
     def build(self, desc) -> FEModel:
         t0 = time.perf_counter()
-        model = check_model(self.builder(desc), "model builder")
+        try:
+            built = self.builder(desc)
+        except MvtkError as err:
+            now = ", ".join(f"{p.path}={get_path(desc, p.path):.6g}" for p in self.params)
+            raise ConfigError(
+                f"the model builder failed at {now}: {err} (if other fields depend on an "
+                "updated one, e.g. points on a length, keep them consistent or fix bounds)"
+            ) from err
+        model = check_model(built, "model builder")
         self.timing["build_s"] += time.perf_counter() - t0
         self.timing["n_builds"] += 1
         return model
