@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import warnings
 from pathlib import Path
 
@@ -242,7 +243,18 @@ def read_hdf5(
         return read_netcdf(path)
 
 
-def read_tdms(path: Path, *, units=None, fs=None):
+class _Collect(logging.Handler):
+    """Collects warnings that npTDMS logs (it logs, rather than raises, on truncation)."""
+
+    def __init__(self):
+        super().__init__(level=logging.WARNING)
+        self.messages: list[str] = []
+
+    def emit(self, record):
+        self.messages.append(record.getMessage())
+
+
+def read_tdms(path: Path, *, units=None, fs=None, allow_truncated=False):
     """Read a National Instruments TDMS file (needs the optional npTDMS: ``mvtk[tdms]``).
 
     Every channel with waveform properties (``wf_increment``) becomes a time-history
@@ -257,6 +269,9 @@ def read_tdms(path: Path, *, units=None, fs=None):
         Units for channels whose ``unit_string`` is empty.
     fs : float, optional
         Sampling rate in Hz for channels without ``wf_increment``.
+    allow_truncated : bool, default False
+        Read a file that npTDMS reports as damaged (short last segment) with a
+        ``DataRepairWarning`` instead of raising ``FormatError``.
     """
     try:
         from nptdms import TdmsFile
@@ -265,6 +280,9 @@ def read_tdms(path: Path, *, units=None, fs=None):
             "reading TDMS needs the optional dependency npTDMS (LGPL): "
             "pip install 'mvtk[tdms]'  (or: pip install npTDMS)"
         ) from err
+    handler = _Collect()
+    logger = logging.getLogger("nptdms")
+    logger.addHandler(handler)
     try:
         tdms = TdmsFile.read(path)
     except Exception as err:  # npTDMS raises ValueError, KeyError, struct errors...
@@ -272,6 +290,13 @@ def read_tdms(path: Path, *, units=None, fs=None):
             f"{path}: not a readable TDMS file ({type(err).__name__}: {err}); expected "
             "segments starting with the 'TDSm' lead-in"
         ) from err
+    finally:
+        logger.removeHandler(handler)
+    if handler.messages:
+        msg = f"{path}: npTDMS reports a damaged file: {'; '.join(handler.messages)}"
+        if not allow_truncated:
+            raise FormatError(msg + "; pass allow_truncated=True to read what is present")
+        warnings.warn(msg + "; read the samples present", DataRepairWarning, stacklevel=3)
     items = []
     for group in tdms.groups():
         for ch in group.channels():

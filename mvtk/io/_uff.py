@@ -335,6 +335,23 @@ def _mode_variable(records: list[tuple[int, dict]], path: Path) -> xr.DataArray:
     )
 
 
+def _check_unterminated(uff, path: Path, n_sets: int) -> None:
+    """Refuse trailing content after the last complete '-1 ... -1' dataset (a cut file)."""
+    blocks = getattr(uff, "_block_ind", None)
+    if blocks is None or len(blocks) == 0:
+        return
+    end = int(blocks[-1][1]) + 1
+    with open(path, "rb") as fh:
+        fh.seek(end)
+        tail = fh.read()
+    rest = tail[6:] if tail.startswith(b"    -1") else tail
+    if rest.strip():
+        raise FormatError(
+            f"{path}, record {n_sets + 1}: data after the last complete dataset without a closing "
+            "'-1' delimiter (truncated file); expected every dataset to end with '    -1'"
+        )
+
+
 def read_uff(path: Path, *, allow_truncated: bool = False):
     """Read UFF 58 / 58b function records and UFF 55 mode shapes.
 
@@ -360,9 +377,15 @@ def read_uff(path: Path, *, allow_truncated: bool = False):
         ) from err
     if not types:
         raise FormatError(f"{path}: no UFF datasets found; expected at least one dataset 58 or 55")
+    _check_unterminated(uff, path, len(types))
     times, spectra, modes = [], [], []
     for i, set_type in enumerate(types):
         index = i + 1
+        if set_type == 0:
+            raise FormatError(
+                f"{path}, record {index}: dataset number unreadable; expected a line with the "
+                "dataset number after the '-1' delimiter"
+            )
         if set_type not in (55, 58):
             warnings.warn(
                 f"{path}, record {index}: dataset type {set_type} is not measurement data "

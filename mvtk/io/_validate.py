@@ -62,13 +62,15 @@ def _check_channels(da: xr.DataArray, cdim: str, label: str, where: str) -> None
                 f"{i}; expected unique names"
             )
         seen[name] = i
-    for coord in ("quantity", "units"):
+    suffix = cdim[len("channel") :]
+    q_name, u_name = "quantity" + suffix, "units" + suffix
+    for coord in (q_name, u_name):
         if coord not in da.coords or da[coord].dims != (cdim,):
             raise FormatError(
                 f"{label}{where}: expected a per-channel '{coord}' coordinate on '{cdim}', "
                 "found none"
             )
-    for name, q, u in zip(names, da["quantity"].values, da["units"].values):
+    for name, q, u in zip(names, da[q_name].values, da[u_name].values):
         if q not in QUANTITIES:
             raise FormatError(
                 f"{label}{where}: channel {name!r} has quantity {q!r}; expected one of "
@@ -94,16 +96,17 @@ def _check_values(da: xr.DataArray, cdim: str, label: str, where: str) -> None:
         name = da[cdim].values[ch] if values.ndim == 2 else ch
         raise FormatError(f"{label}{where}: infinite value in channel {name!r} at sample {i}")
     nan_count = np.isnan(values).reshape(values.shape[0], -1).sum(axis=1)
+    m_name = "n_missing" + cdim[len("channel") :]
     marked = (
-        np.asarray(da["n_missing"].values)
-        if "n_missing" in da.coords
+        np.asarray(da[m_name].values)
+        if m_name in da.coords
         else np.zeros(values.shape[0], dtype=np.int64)
     )
     for k in np.flatnonzero(nan_count != marked):
         name = da[cdim].values[k]
         raise FormatError(
             f"{label}{where}: channel {name!r} holds {int(nan_count[k])} NaN samples but the "
-            f"source marks {int(marked[k])} as missing (coordinate 'n_missing'); expected finite "
+            f"source marks {int(marked[k])} as missing (coordinate {m_name!r}); expected finite "
             "values except marked gaps"
         )
 
