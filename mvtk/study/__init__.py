@@ -1,0 +1,12 @@
+"""Run a whole validation study from one TOML file (see ``data/smart_beam/study.toml``).
+
+``mvtk.study.run(study_path, out_dir)`` chains ingest -> FE -> damping -> updating ->
+Craig-Bampton SE -> controllers -> HTML report, caching each stage in ``out_dir/cache``
+under a hash of its inputs.
+"""
+
+from ._config import Study, load_study
+from ._report import study_checks
+from ._run import STAGES, StudyResult, run
+
+__all__ = ["Study", "StudyResult", "STAGES", "load_study", "run", "study_checks"]

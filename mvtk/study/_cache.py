@@ -1,0 +1,89 @@
+"""Stage cache: each stage's result stored in ``out_dir/cache`` under a hash of its inputs.
+
+A stage result is a JSON-serialisable dict plus, optionally, an ``xarray.Dataset`` of
+arrays (netCDF). The key is the SHA-256 of the canonical JSON of everything the stage
+depends on (its config section, the keys of the upstream stages, input-file hashes and
+the mvtk version), so changing a controller gain reruns only the control stage.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["stage_key", "StageCache", "to_jsonable"]
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Recursively convert numpy scalars/arrays, tuples and paths to JSON types."""
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.floating):
+        return float(obj)
+    if isinstance(obj, Path):
+        return str(obj)
+    return obj
+
+
+def stage_key(*parts: Any) -> str:
+    """SHA-256 (hex, first 16 characters) of the canonical JSON of ``parts``."""
+    text = json.dumps(to_jsonable(list(parts)), sort_keys=True, allow_nan=True)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]
+
+
+class StageCache:
+    """Load or compute stage results in ``directory``.
+
+    Files: ``<stage>.json`` (``{"key": ..., "result": ...}``) and ``<stage>.nc`` (arrays).
+    A stage whose key matches is loaded; otherwise computed and stored (replacing the
+    previous entry of that stage).
+    """
+
+    def __init__(self, directory: str | Path, enabled: bool = True) -> None:
+        self.directory = Path(directory)
+        self.enabled = enabled
+        self.hits: list[str] = []
+        self.misses: list[str] = []
+
+    def get(self, stage: str, key: str, compute: Callable[[], tuple[dict, Any]]):
+        """Return ``(result_dict, dataset_or_None)`` for ``stage`` with ``key``."""
+        import xarray as xr
+
+        js = self.directory / f"{stage}.json"
+        nc = self.directory / f"{stage}.nc"
+        if self.enabled and js.is_file():
+            try:
+                stored = json.loads(js.read_text(encoding="utf-8"))
+            except json.JSONDecodeError:
+                stored = {}
+            if stored.get("key") == key:
+                ds = None
+                if stored.get("has_arrays"):
+                    with xr.open_dataset(nc, engine="h5netcdf") as f:
+                        ds = f.load()
+                self.hits.append(stage)
+                return stored["result"], ds
+        result, ds = compute()
+        self.misses.append(stage)
+        self.directory.mkdir(parents=True, exist_ok=True)
+        if ds is not None:
+            ds.to_netcdf(nc, engine="h5netcdf")
+        elif nc.exists():
+            nc.unlink()
+        js.write_text(json.dumps({"key": key, "has_arrays": ds is not None,
+                                  "result": to_jsonable(result)}, indent=1,
+                                 allow_nan=True), encoding="utf-8")
+        return to_jsonable(result), ds

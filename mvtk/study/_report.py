@@ -1,0 +1,338 @@
+"""The study report: paper-shaped tables, figures, pass/fail checks, provenance."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pandas as pd
+
+from ..report import Report, collect_provenance
+from ..validation import Check, check_table, frequency_table
+
+if TYPE_CHECKING:  # pragma: no cover
+    from ._run import StudyResult
+
+__all__ = ["build_report", "study_checks"]
+
+
+def _ref(res: StudyResult, key: str, default=None):
+    return (res.study.config.get("references") or {}).get(key, default)
+
+
+def _stage_missing(sec, res: StudyResult, stage: str) -> bool:
+    """Mark the section unavailable when the stage did not complete; True if missing."""
+    if stage in res.results:
+        return False
+    reason = res.failed.get(stage) or res.unavailable.get(stage) or "did not run"
+    sec.unavailable(f"stage '{stage}': {reason}")
+    return True
+
+
+def study_checks(res: StudyResult) -> list[Check]:
+    """The pass/fail checks of a study run against its ``[checks]`` tolerances."""
+    tol = res.study.config["checks"]
+    src = _ref(res, "source", "references")
+    checks: list[Check] = []
+    targets = res.study.config.get("updating", {}).get("targets_hz") or _ref(
+        res, "experiment_fn_hz", [])
+    dmp = res.results.get("damping", {})
+    hp = dmp.get("half_power")
+    if hp and targets:
+        for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
+            if i < len(targets):
+                checks.append(Check(f"identified f{i + 1} (half-power peak)", fn, targets[i],
+                                    tol["identified_fn_rel"], "Hz", source="study targets"))
+            zref = _ref(res, "zeta", [])
+            if i < len(zref):
+                checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[i],
+                                    tol["identified_zeta_rel"], "", source=src))
+    env = dmp.get("envelope")
+    zref = _ref(res, "zeta", [])
+    if env and zref:
+        checks.append(Check("identified zeta1 (envelope fit of the free decay)",
+                            env["zeta"][0], zref[0], tol["identified_zeta_rel"], "", source=src))
+    rh = dmp.get("rayleigh_half_power")
+    if rh and _ref(res, "half_power_alpha") is not None:
+        checks.append(Check("Rayleigh alpha (half-power)", rh["alpha"],
+                            _ref(res, "half_power_alpha"), tol["rayleigh_rel"], "1/s",
+                            source=src))
+        checks.append(Check("Rayleigh beta (half-power)", rh["beta"],
+                            _ref(res, "half_power_beta"), tol["rayleigh_rel"], "s", source=src))
+    up = res.results.get("updating")
+    if up:
+        for i, (f, ft) in enumerate(zip(up["fn_hz"], up["targets_hz"])):
+            checks.append(Check(f"updated FE f{i + 1}", f, ft, tol["updated_fn_rel"], "Hz",
+                                source="study targets"))
+        truth = res.study.config.get("truth") or {}
+        for path, value in zip(up["parameters"], up["values"]):
+            if path in truth:
+                checks.append(Check(f"updated {path} vs SYNTHETIC truth", value,
+                                    float(truth[path]), tol["truth_param_rel"], "",
+                                    source="data/make_smart_beam_data.py"))
+    red = res.results.get("reduction")
+    if red:
+        m = red["modes"]
+        for i, (fe, se) in enumerate(zip(m["fe_hz"], m["se_hz"])):
+            checks.append(Check(f"SE f{i + 1} vs FE", se, fe, tol["se_fn_rel"], "Hz",
+                                source="updated FE model"))
+            checks.append(Check(f"SE f{i + 1} >= FE f{i + 1} (Rayleigh-Ritz bound)", se, fe,
+                                1e-9 * fe, "Hz", kind="lower", source="Craig & Bampton 1968"))
+    ctl = res.results.get("control")
+    if ctl:
+        for row in ctl["metrics"]:
+            name = row["controller"]
+            if name == "open loop":
+                continue
+            if name.upper().startswith("PPF"):
+                checks.append(Check(f"{name} settling time", row["settling_time_s"],
+                                    tol["ppf_settling_s"], 0.0, "s", kind="upper",
+                                    source="study tolerance"))
+            z = row["zeta_mode1"]
+            if z is not None and not (isinstance(z, float) and math.isnan(z)):
+                checks.append(Check(f"{name} closed-loop zeta of mode 1", z,
+                                    tol["closed_loop_zeta_min"], 0.0, "", kind="lower",
+                                    source="study tolerance"))
+    return checks
+
+
+def _section_run(rep: Report, res: StudyResult) -> None:
+    sec = rep.section("Study and run summary")
+    if res.study.synthetic:
+        sec.note("The measurement data of this study are SYNTHETIC: simulated by "
+                 "data/make_smart_beam_data.py from a 'truth' beam, not measured. The "
+                 "paper's values are shown next to mvtk's own numbers for comparison.")
+    sec.text(f"Study: {res.study.name} ({res.study.path.name}).")
+    df = res.to_dataframe()
+    df = df[df["stage"] != "report"]
+    sec.table(df, "run_stages", "Stages (cached = loaded from the stage cache)",
+              passed_column=None)
+
+
+def _section_measurements(rep: Report, res: StudyResult) -> None:
+    sec = rep.section("Measurements")
+    if _stage_missing(sec, res, "ingest"):
+        return
+    sec.table(pd.DataFrame(res.results["ingest"]["channels"]), "measurement_channels",
+              "Channels read with mvtk.io.read", passed_column=None)
+
+
+def _section_damping(rep: Report, res: StudyResult) -> None:
+    from ..plot import plot_decay, plot_frf
+
+    sec = rep.section("Damping identification (paper Table 3)")
+    if _stage_missing(sec, res, "damping"):
+        return
+    d = res.results["damping"]
+    arr = res.arrays.get("damping")
+    zref = _ref(res, "zeta", [])
+    rows = []
+    hp = d.get("half_power")
+    n = len(hp["fn_hz"]) if hp else 1
+    for i in range(n):
+        row = {"mode": i + 1}
+        if hp:
+            row.update({"fn_hz (half-power)": hp["fn_hz"][i], "zeta half-power": hp["zeta"][i],
+                        "lines in band": hp["n_lines"][i], "quality": hp["quality"][i]})
+        if i == 0 and d.get("envelope"):
+            row["zeta envelope fit"] = d["envelope"]["zeta"][0]
+            row["zeta log decrement"] = d["log_decrement"]["zeta"][0]
+        for meth in ("half_power", "chowdhury"):
+            r = d.get(f"rayleigh_{meth}", {})
+            if "zeta_fit" in r and i < len(r["zeta_fit"]):
+                row[f"zeta Rayleigh ({meth})"] = r["zeta_fit"][i]
+        if i < len(zref):
+            row["zeta paper"] = zref[i]
+        rows.append(row)
+    sec.table(pd.DataFrame(rows), "damping_per_mode", "Identified damping per mode",
+              passed_column=None)
+    rows = []
+    for meth, label in (("half_power", "half-power"), ("chowdhury", "Chowdhury")):
+        r = d.get(f"rayleigh_{meth}", {})
+        rows.append({"method": label, "alpha [1/s]": r.get("alpha", float("nan")),
+                     "beta [s]": r.get("beta", float("nan")),
+                     "alpha paper": _ref(res, f"{meth}_alpha", float("nan")),
+                     "beta paper": _ref(res, f"{meth}_beta", float("nan")),
+                     "note": r.get("error", "")})
+    sec.table(pd.DataFrame(rows), "table3_rayleigh", "Table 3: Rayleigh alpha and beta",
+              passed_column=None)
+    ch = d.get("rayleigh_chowdhury", {})
+    if "anchors" in ch:
+        sec.text("Chowdhury anchors (0-based identified modes): "
+                 f"{ch['anchors']}; effective mass fractions (uz) of the paired nominal FE "
+                 f"modes: {', '.join(f'{v:.3f}' for v in ch['mass_fraction'])}.")
+    md = d.get("model_damping")
+    if md:
+        sec.text(f"Rayleigh pair used for the SE and the controllers: {md['method']} "
+                 f"(alpha = {md['alpha']:.5g} 1/s, beta = {md['beta']:.5g} s).")
+    for w in d.get("half_power_warnings", []) + d.get("decay_warnings", []):
+        sec.note(w, kind="unavailable")
+    if arr is not None and "frf_abs" in arr:
+        bands = []
+        if hp:
+            bands = [(a, b, c) for a, b, c in zip(hp["f1_hz"], hp["f2_hz"], hp["fn_hz"])
+                     if np.isfinite([a, b, c]).all()]
+        sec.figure(plot_frf(arr["frequency"].values, arr["frf_abs"].values, bands=bands,
+                            ylabel=f"|H| [{d.get('frf_units', '')}]",
+                            title="Impact FRF (H1) with half-power bands"),
+                   "Impact-test FRF with the half-power bands of each mode (shaded).")
+        for i, (lo, hi, fn) in enumerate(bands):
+            w = max(6 * (hi - lo), 0.3)
+            sec.figure(plot_frf(arr["frequency"].values, arr["frf_abs"].values,
+                                bands=[(lo, hi, fn)], f_range=(fn - w, fn + w),
+                                ylabel="|H|", title=f"Mode {i + 1}: zoom on the half-power band"),
+                       f"Half-power band of mode {i + 1} and the frequency lines across it.")
+    if arr is not None and "decay_x" in arr and d.get("envelope"):
+        t = arr["decay_t"].values
+        x = arr["decay_x"].values
+        fn, z = d["envelope"]["fn_hz"][0], d["envelope"]["zeta"][0]
+        a0 = float(np.max(np.abs(x[t < t[0] + 2.0 / fn])))
+        fit = a0 * np.exp(-z * 2 * np.pi * fn * (t - t[0]))
+        sec.figure(plot_decay(t, x, fit=fit, label_fit=f"exp(-zeta wn t), zeta = {z:.3e}",
+                              ylabel=f"tip displacement [{d.get('decay_units', '')}]",
+                              title="Free decay from mode 1 and the envelope fit"),
+                   "Free decay (raw, not band-passed) with the fitted exponential envelope "
+                   "(scaled to the initial amplitude).")
+
+
+def _section_fe(rep: Report, res: StudyResult) -> None:
+    from ..plot import plot_mode_shapes
+
+    sec = rep.section("FE model and updating (paper Table 2)")
+    if _stage_missing(sec, res, "fe"):
+        return
+    fe = res.results["fe"]
+    sec.text(f"Nominal FE model: {fe['n_nodes']} nodes, {fe['n_elements']} elements, "
+             f"{fe['n_dof']} free DOFs; total mass moving with the clamp "
+             f"{fe['total_mass_kg']:.4g} kg.")
+    cols = {}
+    up = res.results.get("updating")
+    targets = (up or {}).get("targets_hz") or _ref(res, "experiment_fn_hz")
+    if targets:
+        cols["experiment"] = targets
+    cols["FE nominal"] = fe["fn_hz"][: len(targets) if targets else None]
+    if up:
+        cols["FE updated"] = up["fn_hz"]
+    if _ref(res, "fe_fn_hz"):
+        cols["paper FE"] = _ref(res, "fe_fn_hz")
+    if targets:
+        sec.table(frequency_table(cols, "experiment"), "table2_frequencies",
+                  "Table 2: FE vs experiment eigenfrequencies [Hz] (errors in % of the "
+                  "experiment)", passed_column=None)
+    modes = pd.DataFrame({"mode": np.arange(1, len(fe["fn_hz"]) + 1),
+                          "fn_hz nominal": fe["fn_hz"], "type": fe["mode_type"],
+                          "mass fraction uz": fe["mass_fraction_uz"]})
+    if up:
+        k = min(len(up["model_fn_hz"]), len(modes))
+        modes["fn_hz updated"] = np.nan
+        modes.loc[: k - 1, "fn_hz updated"] = up["model_fn_hz"][:k]
+    sec.table(modes, "fe_modes", "Lowest modes of the FE model (modes the paper does not "
+              "list are shown too)", passed_column=None)
+    if up:
+        truth = res.study.config.get("truth") or {}
+        prm = pd.DataFrame({"parameter": up["parameters"], "initial": up["initial_values"],
+                            "updated": up["values"], "std": up["std"],
+                            "at bound": up["at_bound"]})
+        if truth:
+            prm["SYNTHETIC truth"] = [truth.get(p, float("nan")) for p in up["parameters"]]
+        sec.table(prm, "updating_parameters",
+                  f"Updated parameters ({up['n_evaluations']} evaluations, "
+                  f"condition number {up['condition_number']:.3g}, "
+                  f"identifiable: {up['identifiable']})", passed_column=None)
+        for w in up.get("warnings", []):
+            sec.note(w, kind="unavailable")
+    elif "updating" in res.failed or "updating" in res.unavailable:
+        _stage_missing(sec, res, "updating")
+    arr = res.arrays.get("fe")
+    if arr is not None:
+        k = min(4, arr.sizes["mode"])
+        sec.figure(plot_mode_shapes(arr["nodes"].values, arr["uz"].values[:, :k],
+                                    fe["fn_hz"][:k]),
+                   "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
+
+
+def _section_se(rep: Report, res: StudyResult) -> None:
+    sec = rep.section("Super element (paper Tables 4 and 5)")
+    if _stage_missing(sec, res, "reduction"):
+        return
+    r = res.results["reduction"]
+    sec.text("Retained nodes (nearest FE node to each configured point): " + "; ".join(
+        f"{k} -> node {v}" for k, v in r["retained_nodes"].items()) + ".")
+    if r.get("sizes"):
+        sizes = pd.DataFrame(r["sizes"])
+        fe_s, se_s = _ref(res, "fe_sizes"), _ref(res, "se_sizes")
+        if fe_s and se_s and len(sizes) == len(fe_s):
+            sizes["paper FE"] = fe_s
+            sizes["paper SE"] = se_s
+        sec.table(sizes, "table4_sizes", "Table 4: FE vs SE model sizes", passed_column=None)
+    m = pd.DataFrame(r["modes"])
+    fe4, se4 = _ref(res, "fe4_fn_hz"), _ref(res, "se4_fn_hz")
+    if fe4 and se4 and len(fe4) >= len(m):
+        m["paper FE"] = fe4[: len(m)]
+        m["paper SE"] = se4[: len(m)]
+    sec.table(m, "table5_fe_vs_se", "Table 5: FE vs SE eigenfrequencies [Hz]; error_pct = "
+              "100 (SE - FE) / FE, error_pct_of_se = 100 (SE - FE) / SE (the paper's "
+              "convention)", passed_column=None)
+    if r.get("static"):
+        st = pd.DataFrame(r["static"])
+        sec.table(st, "se_static_check", "Static check: unit loads on boundary DOFs, FE vs SE "
+                  "boundary displacement", passed_column=None)
+
+
+def _section_control(rep: Report, res: StudyResult) -> None:
+    from ..plot import plot_spectra, plot_time_responses
+
+    sec = rep.section("Active vibration control on the SE")
+    if _stage_missing(sec, res, "control"):
+        return
+    c = res.results["control"]
+    cfg = res.study.config["control"]
+    sec.text("The SE plant is released from its first mode with a tip displacement of "
+             f"{cfg['initial_tip_displacement_m']:g} m and the controllers are switched on "
+             "at t = 0. Actuator: equal and opposite moments at the two actuator-edge nodes "
+             "(pin-force model), in N m. Settling time: after it the tip displacement stays "
+             f"within {100 * c['settle_band']:g} % of its initial amplitude. The Lyapunov "
+             "controller is the velocity form with a boundary layer (mvtk.control."
+             "LyapunovBangBang); being nonlinear it has no closed-loop poles (zeta shown as –).")
+    df = pd.DataFrame(c["metrics"])
+    sec.table(df, "controller_comparison", "Controller comparison", passed_column=None)
+    ps, os_ = _ref(res, "ppf_settling_s"), _ref(res, "other_settling_s")
+    if ps is not None:
+        sec.text(f"Paper (section 4.3): PPF settles in about {ps} s, SRF and Lyapunov in "
+                 f"about {os_} s.")
+    arr = res.arrays.get("control")
+    if arr is not None:
+        t = arr["time"].values
+        tips = {str(r): arr["tip"].sel(run=r).values for r in arr["run"].values}
+        sec.figure(plot_time_responses(t, tips, zoom=(0.0, min(1.0, t[-1])),
+                                       title="Tip displacement with and without control"),
+                   "Tip displacement vs time (top) and a zoom on the first second (bottom).")
+        f = arr["frequency"].values
+        spec = {str(r): arr["spectrum"].sel(run=r).values for r in arr["run"].values}
+        fmax = min(f[-1], 60.0)
+        sec.figure(plot_spectra(f, spec, f_range=(0.0, fmax),
+                                title="Amplitude spectra of the tip displacement"),
+                   "FFT amplitude spectra of the tip displacement with and without control.")
+
+
+def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
+    """Write ``res.out_dir/index.html`` (+ tables/*.csv) and return the page path."""
+    title = f"mvtk validation report: {res.study.name}"
+    rep = Report(title)
+    _section_run(rep, res)
+    _section_measurements(rep, res)
+    _section_damping(rep, res)
+    _section_fe(rep, res)
+    _section_se(rep, res)
+    _section_control(rep, res)
+    sec = rep.section("Pass/fail checks")
+    checks = study_checks(res)
+    if checks:
+        sec.table(check_table(checks), "checks", "Checks against the study's tolerances")
+    else:
+        sec.unavailable("no check could be evaluated (no stage produced comparable numbers)")
+    params = {"study": res.study.config, "file_sha256": hashes}
+    rep.add_provenance(collect_provenance(res.study.input_files, params))
+    return rep.write(res.out_dir)
