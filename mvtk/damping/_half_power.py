@@ -156,9 +156,10 @@ def _crossing(c, p, level, lo, hi):
     roots = roots[np.isreal(roots)].real
     if roots.size == 0:
         return None
-    inside = roots[(roots >= lo - 1e-9 * hi) & (roots <= hi + 1e-9 * hi)]
+    tol = 1e-9 * (hi if np.isfinite(hi) else lo)
+    inside = np.sort(roots[(roots >= lo - tol) & (roots <= hi + tol)])
     if inside.size:
-        return float(inside[0])
+        return float(inside[-1] if np.isinf(hi) else inside[0])
     return None
 
 
@@ -174,9 +175,9 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
         y = u**p / a**2  # = P(u) for a single mode
     if method == "fit":
         jl, jr = k, k
-        while jl > 0 and a[jl - 1] >= fit_level * a[k] and a[jl - 1] <= a[jl]:
+        while jl > 0 and fit_level * a[k] <= a[jl - 1] <= a[k]:
             jl -= 1
-        while jr < n - 1 and a[jr + 1] >= fit_level * a[k] and a[jr + 1] <= a[jr]:
+        while jr < n - 1 and fit_level * a[k] <= a[jr + 1] <= a[k]:
             jr += 1
         sl = slice(jl, jr + 1)
         if jr - jl + 1 < 3:
@@ -188,10 +189,8 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
         c2, c1, c0 = _wfit(x, y[idx], w)
         cpk = (c0 - c1 * us / ss + c2 * us**2 / ss**2, c1 / ss - 2 * c2 * us / ss**2,
                c2 / ss**2)
-        cl = cr = cpk
     else:
         cpk = _quad(u[k - 1:k + 2], y[k - 1:k + 2])
-        cl = cr = None
     m = _min_of(cpk, p)
     if m is None:
         gpk, upk = y[k] / u[k] ** p, u[k]
@@ -202,22 +201,30 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
     peak = 1 / np.sqrt(gpk)
     level = peak / np.sqrt(2)
     out = {"k": k, "peak": peak, "upk": upk}
+    if method == "fit":
+        left = _crossing(cpk, p, 2 * gpk, 0.0, upk)
+        right = _crossing(cpk, p, 2 * gpk, upk, np.inf)
+        if left is None or right is None or left <= 0:
+            return out, "failed"
+        out["left"] = np.sqrt(left) / (2 * np.pi)
+        out["right"] = np.sqrt(right) / (2 * np.pi)
+        return out, "ok"
     for side, step in (("left", -1), ("right", 1)):
         j = k
+        low = a[k]
         while 0 <= j + step < n and a[j + step] > level:
-            if a[j + step] > a[j]:  # rising again before the -3 dB point: overlap
+            low = min(low, a[j + step])
+            # rising again (beyond noise) before the -3 dB point: a neighbouring mode
+            if a[j + step] > a[k] or a[j + step] > 1.25 * low:
                 return out, "overlap"
             j += step
         if not 0 <= j + step < n:
             return out, "failed"
         jo = j + step  # first line below the level
         u_lo, u_hi = sorted((u[j], u[jo]))
-        if method == "fit":
-            c = cl if side == "left" else cr
-        else:
-            tri = np.array(sorted({j - step, j, jo} if 0 <= j - step < n else {j, jo, jo + step}))
-            tri = tri[(tri >= 0) & (tri < n)]
-            c = _quad(u[tri], y[tri]) if tri.size == 3 else None
+        tri = np.array(sorted({j - step, j, jo} if 0 <= j - step < n else {j, jo, jo + step}))
+        tri = tri[(tri >= 0) & (tri < n)]
+        c = _quad(u[tri], y[tri]) if tri.size == 3 else None
         root = _crossing(c, p, 2 * gpk, u_lo, u_hi) if c is not None else None
         if root is None:  # fall back to linear interpolation of 1/|H|^2
             g1, g2 = 1 / a[j] ** 2, 1 / a[jo] ** 2
@@ -352,7 +359,7 @@ def half_power(
                 others = np.delete(targets, m)
                 if others.size and np.min(np.abs(others - fn)) < overlap_factor * band:
                     quality = "overlap"
-                elif nl < min_lines:
+                elif nl < min_lines * (1 - 1e-6):
                     quality = "coarse"
             else:
                 fn = z = nl = band = np.nan
