@@ -122,6 +122,7 @@ class _Problem:
                        "n_builds": 0, "n_eigen": 0, "n_jacobians": 0}
         self.fd_params: set[str] = set()
         self._cache: _State | None = None
+        self._lowest: float | None = None
 
     # -------------------------------------------------------------- helpers
     def values(self, x: np.ndarray) -> np.ndarray:
@@ -156,7 +157,16 @@ class _Problem:
                 f"the model has {model.n_dof} DOFs, fewer than the {len(self.targets)} targets"
             )
         t0 = time.perf_counter()
-        eig = eigsh_lowest(model.K, model.M, n)
+        # shift: eigsh_lowest's default (-1e-6 x median K_ii/M_ii) sits far below the
+        # wanted modes when rotational DOFs carry little inertia, and shift-invert then
+        # needs many more iterations; once the lowest eigenvalue is known, shift to
+        # -0.1 of it (K - sigma M stays positive definite)
+        sigma = None
+        if self._lowest is not None and self._lowest > 0:
+            sigma = -0.1 * self._lowest
+        eig = eigsh_lowest(model.K, model.M, n, sigma=sigma)
+        if eig.omega2[0] > 0:
+            self._lowest = float(eig.omega2[0])
         self.timing["eigen_s"] += time.perf_counter() - t0
         self.timing["n_eigen"] += 1
         return eig
