@@ -18,16 +18,16 @@ flexibility of the dropped modes as a feedthrough ``D`` so the DC gain stays exa
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
-from ..errors import DimensionError, ParameterError
+from ..errors import AccuracyWarning, DimensionError, ParameterError
 from ..fe import DOF_NAMES, FEModel, eigsh_lowest, factorize
 from ..reduction import SuperElement
-from ..reduction._craig_bampton import damping_matrix
+from ..reduction._craig_bampton import damping_matrix, reduced_modes
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
 
@@ -280,6 +280,15 @@ def structural_plant(
             raise ParameterError("n_modes applies to form='modal' only")
         if se is not None:
             M, K, coords = se.M, se.K, list(se.labels)
+            n_massless = reduced_modes(K, M).n_massless
+            if n_massless:
+                warnings.warn(
+                    f"{n_massless} coordinate(s) of the super element have no inertia (e.g. "
+                    "shell drilling rotations): M is singular and the physical-form state "
+                    "space is ill-conditioned; use form='modal'",
+                    AccuracyWarning,
+                    stacklevel=2,
+                )
             B, Cr = se.T.T @ F, Cphys @ se.T
         else:
             if model.n_dof > MAX_DENSE_DOF:
@@ -298,11 +307,16 @@ def structural_plant(
 
     # ---------------------------------------------------------------- modal form
     if se is not None:
+        modes = reduced_modes(se.K, se.M)
         n_total = se.n_dof
-        n_kept = n_total if n_modes is None else int(n_modes)
-        if not 1 <= n_kept <= n_total:
-            raise ParameterError(f"n_modes must be in 1..{n_total} (SE size), got {n_modes}")
-        w2, phi = sla.eigh(se.K, se.M)
+        n_finite = modes.omega2.size
+        n_kept = n_finite if n_modes is None else int(n_modes)
+        if not 1 <= n_kept <= n_finite:
+            raise ParameterError(
+                f"n_modes must be in 1..{n_finite} (SE modes of finite frequency; SE size "
+                f"{n_total}), got {n_modes}"
+            )
+        w2, phi = modes.omega2, modes.vectors
         B_r, C_r = se.T.T @ F, Cphys @ se.T
         correct = n_kept < n_total and static_correction
         _check_restrained(w2, correct)
@@ -326,7 +340,8 @@ def structural_plant(
     omega = np.sqrt(np.clip(w2, 0.0, None))
     Bm, Cm = phi.T @ B_r, C_r @ phi
     if modal_damping is not None:
-        cdiag = _modal_damping_diag(modal_damping, n_kept, n_total, omega)
+        cdiag = _modal_damping_diag(modal_damping, n_kept, n_total if se is None else n_finite,
+                                    omega)
     else:
         cdiag = alpha + beta * w2
     D = np.zeros((Cm.shape[0], Bm.shape[1]))

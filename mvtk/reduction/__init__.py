@@ -6,9 +6,12 @@ Public API::
     guyan(model, retained, *, retained_dofs)
     effective_mass(model_or_se, direction="uz", n_modes=20) -> EffectiveMassTable
     compare_modes / static_check / size_table / verify / mac
+    reduced_modes(K, M)  (modes of a reduced pencil whose M may be singular)
+    super_element_from_config(model, reduction_table) -> (SuperElement, retained points)
 """
 
-from ._craig_bampton import SuperElement, craig_bampton, guyan
+from ._config import RetainedPoint, super_element_from_config
+from ._craig_bampton import ReducedModes, SuperElement, craig_bampton, guyan, reduced_modes
 from ._effective_mass import EffectiveMassTable, effective_mass
 from ._verify import (
     ModeComparison,
@@ -26,6 +29,10 @@ __all__ = [
     "SuperElement",
     "craig_bampton",
     "guyan",
+    "reduced_modes",
+    "ReducedModes",
+    "super_element_from_config",
+    "RetainedPoint",
     "EffectiveMassTable",
     "effective_mass",
     "ModeComparison",

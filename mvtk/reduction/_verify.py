@@ -12,11 +12,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.linalg as sla
 
 from ..errors import DimensionError, ParameterError
 from ..fe import FEModel, eigsh_lowest, factorize
-from ._craig_bampton import SuperElement
+from ._craig_bampton import SuperElement, reduced_modes
 
 __all__ = [
     "ModeComparison",
@@ -113,8 +112,13 @@ class ModeComparison:
 
 
 def _se_modes(se: SuperElement, n: int) -> tuple[np.ndarray, np.ndarray]:
-    w2, v = sla.eigh(se.K, se.M, subset_by_index=[0, n - 1])
-    return w2, v
+    modes = reduced_modes(se.K, se.M)
+    if modes.omega2.size < n:
+        raise ParameterError(
+            f"the super element has only {modes.omega2.size} modes of finite frequency "
+            f"({modes.n_massless} coordinates without inertia); asked for {n}"
+        )
+    return modes.omega2[:n], modes.vectors[:, :n]
 
 
 def compare_modes(model: FEModel | None, se: SuperElement, n: int = 4) -> ModeComparison:

@@ -220,7 +220,7 @@ def test_bad_inputs(beam, se, monkeypatch):
         structural_plant(se, ok_in, ok_out, n_modes=2)
     with pytest.raises(ParameterError, match="needs n_modes"):
         structural_plant(beam, ok_in, ok_out, form="modal")
-    with pytest.raises(ParameterError, match=r"n_modes must be in 1..10 \(SE size\)"):
+    with pytest.raises(ParameterError, match=r"n_modes must be in 1..10 \(SE modes of finite"):
         structural_plant(se, ok_in, ok_out, form="modal", n_modes=11)
     with pytest.raises(DimensionError, match="modal_damping must be one ratio or one per"):
         structural_plant(se, ok_in, ok_out, form="modal", n_modes=2, modal_damping=[0.1] * 3)

@@ -17,6 +17,7 @@ from mvtk.reduction import (
     static_check,
     verify,
 )
+from mvtk.reduction._craig_bampton import reduced_modes
 from mvtk.reduction._examples import eb_beam_xz
 
 
@@ -112,3 +113,35 @@ def test_bad_inputs(beam):
     modal_only = craig_bampton(beam, "clamp", 3)
     with pytest.raises(ParameterError, match="no boundary DOF to load"):
         static_check(beam, modal_only)
+
+
+def test_reduced_modes_with_massless_coordinate():
+    K = np.array([[2.0, -1.0], [-1.0, 1.0]])
+    M = np.diag([1.0, 0.0])  # second coordinate without inertia: condensed K = 1
+    modes = reduced_modes(K, M)
+    assert modes.n_massless == 1
+    np.testing.assert_allclose(modes.omega2, [1.0])
+    np.testing.assert_allclose(modes.vectors[:, 0], [1.0, 1.0])
+    free = reduced_modes(np.array([[1.0, -1.0], [-1.0, 1.0]]), np.eye(2))  # rigid mode
+    np.testing.assert_allclose(free.omega2, [0.0, 2.0], atol=1e-10)
+    np.testing.assert_allclose(free.fn_hz, np.sqrt([0.0, 2.0]) / (2 * np.pi), atol=1e-6)
+
+
+def test_shell_super_element_respects_upper_bound():
+    """MITC4 plate SE: boundary drilling rotations have ~no inertia, M_r is singular to
+    working precision; a naive eigh(K_r, M_r) put mode 2 below the FE value."""
+    import tomllib
+    from pathlib import Path
+
+    from mvtk.fe import build_model
+
+    text = (Path(__file__).resolve().parents[2] / "data" / "structures" /
+            "smart_beam.toml").read_text().replace("element_size = 0.005",
+                                                   "element_size = 0.01")
+    model = build_model(tomllib.loads(text))
+    pts = [[0.005, 0.0665, 0], [0.055, 0.0665, 0], [0.12, 0.0665, 0], [0.18, 0.0665, 0]]
+    se = craig_bampton(model, pts, 10)
+    assert reduced_modes(se.K, se.M).n_massless >= 1
+    cmp = compare_modes(model, se, 5)
+    assert np.all(cmp.error_pct >= -1e-9)
+    assert np.all(cmp.error_pct < 0.2) and np.all(cmp.mac_diagonal > 0.999)
