@@ -143,7 +143,8 @@ def log_decrement(
 
     Positive peaks are located (parabolic interpolation of time and amplitude), the
     decrement ``delta = ln(x_k / x_{k+1})`` is the slope of ``ln x_k`` against the
-    peak number obtained by least squares over all peaks above ``threshold`` x the
+    peak number obtained by least squares (weighted by ``x_k**2``, since additive noise
+    gives ``ln x_k`` a variance ~ ``1/x_k**2``) over all peaks above ``threshold`` x the
     largest (the classic two-peak formula ``ln(x_0/x_n)/n`` is its two-point case),
     and ``zeta = delta / sqrt(4 pi^2 + delta^2)``. The damped period is the slope of
     the peak times.
@@ -192,7 +193,7 @@ def log_decrement(
             )
         k = np.arange(amp.size, dtype=float)
         slope_t, se_t, _, _ = _linfit(k, t)  # damped period
-        slope_a, se_a, _, _ = _linfit(k, np.log(amp))
+        slope_a, se_a, _, _ = _linfit(k, np.log(amp), amp**2)
         delta, delta_se = -slope_a, se_a
         td, td_se = slope_t, se_t
         sigma, sigma_se = delta / td, np.hypot(delta_se / td, delta * td_se / td**2)
