@@ -87,6 +87,11 @@ def _prepare(x, channel, fn_hz, band_hz, order):
     return data, fs, names, band_hz
 
 
+def _settle_s(band) -> float:
+    """Time (s) for the band-pass filter's own transient to die out: 3 / bandwidth."""
+    return 0.0 if band is None else 3.0 / (band[1] - band[0])
+
+
 def _zeta_from(sigma, sigma_se, wd, wd_se):
     wn = np.hypot(sigma, wd)
     zeta = sigma / wn
@@ -137,7 +142,7 @@ def log_decrement(
     band_hz: tuple[float, float] | None = None,
     threshold: float = 0.05,
     skip_cycles: int = 1,
-    order: int = 4,
+    order: int = 2,
 ) -> DecayResult:
     """Logarithmic decrement of a free decay, one mode per channel.
 
@@ -163,7 +168,11 @@ def log_decrement(
     threshold : float
         Peaks below this fraction of the largest peak are ignored (noise floor).
     skip_cycles : int
-        Peaks discarded at the start (filter and impact transients).
+        Peaks discarded after the largest one (impact transients). With a band-pass
+        filter, peaks within ``3 / (high - low)`` s of either end are also dropped
+        (the zero-phase filter's own transient).
+    order : int
+        Order of the Butterworth band-pass (applied forwards and backwards).
 
     Returns
     -------
@@ -176,7 +185,8 @@ def log_decrement(
     for name, sig in zip(names, data):
         guess = fn_hz or _fn_guess(sig, fs)
         t, amp = _peaks(sig, fs, guess)
-        keep = np.flatnonzero(amp > 0)
+        settle = _settle_s(band)
+        keep = np.flatnonzero((amp > 0) & (t >= settle) & (t <= sig.size / fs - settle))
         t, amp = t[keep], amp[keep]
         if amp.size:
             i0 = int(np.argmax(amp))
@@ -212,7 +222,7 @@ def envelope_fit(
     method: str = "hilbert",
     threshold: float = 0.05,
     trim: float = 0.05,
-    order: int = 4,
+    order: int = 2,
 ) -> DecayResult:
     """Exponential fit of the envelope of a (band-passed) free decay.
 
@@ -231,7 +241,9 @@ def envelope_fit(
         As in :func:`log_decrement`.
     method : {"hilbert", "peaks"}
     trim : float
-        Fraction of the record dropped at both ends (Hilbert method).
+        Fraction of the record dropped at both ends (Hilbert method). With a band-pass
+        filter at least ``3 / (high - low)`` s is dropped at both ends (the filter's
+        own transient).
 
     Returns
     -------
@@ -256,7 +268,8 @@ def envelope_fit(
             env = np.abs(z)
             phase = np.unwrap(np.angle(z))
             t = np.arange(n) / fs
-            i0, i1 = int(trim * n), n - int(trim * n)
+            settle = int(np.ceil(_settle_s(band) * fs))
+            i0, i1 = max(int(trim * n), settle), n - max(int(trim * n), settle)
             t, env, phase = t[i0:i1], env[i0:i1], phase[i0:i1]
         else:
             guess = fn_hz or _fn_guess(sig, fs)
@@ -266,7 +279,8 @@ def envelope_fit(
             env = np.r_[ap, an]
             order_t = np.argsort(t)
             t, env = t[order_t], env[order_t]
-            keep = env > 0
+            settle = _settle_s(band)
+            keep = (env > 0) & (t >= settle) & (t <= n / fs - settle)
             t, env = t[keep], env[keep]
             phase = None
         if env.size:

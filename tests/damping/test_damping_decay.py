@@ -30,7 +30,7 @@ def test_sdof_accuracy_40db(zeta, estimator):
     assert r.zeta_std[0] > 0
 
 
-@pytest.mark.parametrize("zeta", [5e-4, 2e-3, 1e-2])
+@pytest.mark.parametrize("zeta", [5e-4, 2e-3, 1e-2, 5e-2])
 @pytest.mark.parametrize("estimator", [log_decrement, envelope_fit])
 def test_two_mode_decay_band_passed_40db(zeta, estimator):
     # the second mode (3.1 fn, like the paper's torsion mode) is removed by the band-pass
