@@ -24,11 +24,20 @@ _BETA_L = (1.8751040687119611, 4.6940911329741746, 7.8547574382376126, 10.995540
 def cantilever_beta_l(n_modes: int) -> np.ndarray:
     """Eigenvalues ``beta_n L`` of the clamped-free Euler-Bernoulli beam.
 
-    Exact roots for n <= 4, ``(2n - 1) pi / 2`` beyond (error < 1e-7).
+    Roots of ``cos b + 1 / cosh b = 0`` (i.e. ``1 + cos b cosh b = 0``): tabulated for
+    n <= 4, Newton-refined from ``(2n - 1) pi / 2`` beyond.
     """
     if n_modes < 1:
         raise ParameterError(f"n_modes must be >= 1, got {n_modes}")
-    out = [_BETA_L[i] if i < 4 else (2 * i + 1) * np.pi / 2 for i in range(n_modes)]
+    out = []
+    for i in range(n_modes):
+        if i < 4:
+            out.append(_BETA_L[i])
+            continue
+        b = (2 * i + 1) * np.pi / 2
+        for _ in range(3):
+            b -= (np.cos(b) + 1 / np.cosh(b)) / (-np.sin(b) - np.tanh(b) / np.cosh(b))
+        out.append(b)
     return np.array(out)
 
 
