@@ -100,6 +100,81 @@ def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = Non
     return "torsion" if anti > sym else "bending"
 
 
+#: Pivots of the LU of K below this fraction of the largest mark a singular K.
+_SINGULAR_PIVOT = 1e-12
+
+
+def _smooth_trial_scale(model: FEModel) -> float:
+    """Smallest Rayleigh quotient (rad/s)^2 of smooth quadratic bending trial fields.
+
+    Fields ``u_d = s_a^2`` with the Kirchhoff-consistent rotation
+    ``theta = (e_a x e_d) 2 s_a`` for every pair of axes (a, d), with ``s_a`` measured
+    from the minimum, the centroid and the maximum of coordinate a (so that a field
+    vanishes on a support along a coordinate line). Within a small factor of the first
+    elastic eigenvalue of a free or partly supported structure; used to place the
+    negative shift of a singular problem.
+    """
+    node, comp = model.dof_node, model.dof_component
+    xyz = model.nodes
+    best = np.inf
+    for a in range(3):
+        if np.ptp(xyz[:, a]) == 0:
+            continue
+        for origin in (xyz[:, a].min(), xyz[:, a].mean(), xyz[:, a].max()):
+            s_a = xyz[:, a] - origin
+            for d in range(3):
+                if d == a:
+                    continue
+                full = np.zeros((model.n_nodes, 6))
+                full[:, d] = s_a**2
+                axis = np.cross(np.eye(3)[a], np.eye(3)[d])
+                full[:, 3:] = 2 * s_a[:, None] * axis[None, :]
+                x = full[node, comp]
+                mm = float(x @ (model.M @ x))
+                kk = float(x @ (model.K @ x))
+                if mm > 0 and kk > 0:
+                    best = min(best, kk / mm)
+    return best
+
+
+def _lowest_modes(model: FEModel, n: int, sigma: float | None):
+    """Eigenpairs: shift 0 with the LU of K when K is positive definite (one
+    factorisation), else a negative shift through :func:`eigsh_lowest`."""
+    import scipy.sparse.linalg as spla
+
+    from ..errors import ConvergenceError
+
+    if sigma is not None or model.n_dof <= 400:
+        return eigsh_lowest(model.K, model.M, n, sigma=sigma)
+    try:
+        lu = factorize(model.K)
+        piv = lu.U.diagonal()
+        singular = bool(np.any(piv <= _SINGULAR_PIVOT * np.max(np.abs(piv))))
+    except ParameterError:
+        singular = True
+    if singular:
+        scale = _smooth_trial_scale(model)
+        shift = -1e-2 * scale if np.isfinite(scale) else None
+        return eigsh_lowest(model.K, model.M, n, sigma=shift)
+    ndof = model.n_dof
+    opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
+    try:
+        w, v = spla.eigsh(model.K, k=n, M=model.M, sigma=0.0, which="LM", OPinv=opinv,
+                          ncv=min(ndof, max(2 * n + 1, 20)))
+    except spla.ArpackNoConvergence as err:
+        raise ConvergenceError(
+            f"eigsh did not converge for {n} modes of a {ndof}-DOF model"
+        ) from err
+    order = np.argsort(w)
+    w, v = w[order], v[:, order]
+    v = v / np.sqrt(np.einsum("ij,ij->j", v, model.M @ v))
+    big = np.argmax(np.abs(v), axis=0)
+    v = v * np.sign(v[big, np.arange(v.shape[1])])
+    from ._solvers import EigenSolution
+
+    return EigenSolution(omega2=w, vectors=v)
+
+
 def modal_analysis(
     model: FEModel, n_modes: int = 6, sigma: float | None = None, rigid_tol_hz: float | None = None
 ) -> ModalResult:
@@ -111,11 +186,20 @@ def modal_analysis(
     n_modes : int
         Number of modes (1 <= n_modes < n_dof).
     sigma : float, optional
-        Shift in (rad/s)^2; default a small negative shift, so free-free structures work.
+        Shift in (rad/s)^2. Default: K is factorised once; if it is positive definite
+        (all LU pivots > 1e-12 of the largest) that factorisation is reused with shift 0,
+        otherwise (rigid-body modes) the shift is -1 % of the Rayleigh quotient of a smooth
+        quadratic bending field, a few times below the first elastic eigenvalue.
     rigid_tol_hz : float, optional
-        Modes below this frequency are rigid-body modes. Default: ``1e-4`` times the
-        first clearly elastic frequency scale, i.e. ``|omega2| < 1e-8 * max(omega2)``
-        with at least ``1e-3`` Hz.
+        Modes below this frequency are rigid-body modes. Default:
+        ``|omega2| < 1e-8 * max(|omega2|)``, and at least below 1e-3 Hz.
+
+    Notes
+    -----
+    Lanczos shift-invert (ARPACK) on ``(K - sigma M)^-1 M``; it converges quickly only
+    when the shift is close to the wanted eigenvalues compared with the rest of the
+    spectrum, hence the shift choice above (a shift from matrix diagonals can be 1e9
+    times too far for thin plates).
 
     Returns
     -------
@@ -127,7 +211,7 @@ def modal_analysis(
         raise ParameterError(f"n_modes must be an integer, got {n_modes!r}")
     if not 1 <= n_modes < model.n_dof:
         raise ParameterError(f"n_modes must be in 1..{model.n_dof - 1}, got {n_modes}")
-    sol = eigsh_lowest(model.K, model.M, int(n_modes), sigma=sigma)
+    sol = _lowest_modes(model, int(n_modes), sigma)
     w2 = sol.omega2
     if rigid_tol_hz is None:
         scale = float(np.max(np.abs(w2))) if w2.size else 0.0

@@ -27,8 +27,12 @@ Hughes-Brezzi (1989) penalty ``gamma_d * integral (rz - (v,x - u,y)/2)^2 dA`` wi
 ``DRILL_FACTOR = 1e-3``, integrated 2x2. This ties ``rz`` to the in-plane rotation, keeps
 the in-plane rigid rotation a zero-energy mode (free-free plates have 6 rigid-body modes),
 and with the small factor changes in-plane stiffness by well under 0.1 %. The drilling
-inertia is ``I2`` (same as the other rotations) so that the mass matrix is positive
-definite; drilling modes lie far above the bending modes.
+rotation has no physical inertia of its own (the in-plane rotation's inertia is carried by
+u and v); a token inertia ``DRILL_INERTIA_FACTOR * I2`` with ``DRILL_INERTIA_FACTOR = 1e-6``
+keeps the mass matrix positive definite while pushing the drilling modes far above the
+structural ones (with inertia ``I2`` they would fall near
+``sqrt(12 * 1e-3 * G / rho) / (2 pi h)``, e.g. 280 Hz for a 0.2 m thick steel plate, below
+its first bending mode).
 
 Mass: consistent, from the kinetic energy of the FSDT field with the inertia terms
 ``I0`` (translations), ``I1`` (coupling of u0 with beta_x, v0 with beta_y: non-zero for
@@ -47,10 +51,12 @@ import numpy as np
 
 from ..errors import DimensionError, ParameterError
 
-__all__ = ["DRILL_FACTOR", "mitc4_matrices"]
+__all__ = ["DRILL_FACTOR", "DRILL_INERTIA_FACTOR", "mitc4_matrices"]
 
 #: Drilling penalty factor relative to the section in-plane shear stiffness A66.
 DRILL_FACTOR = 1e-3
+#: Inertia of the drilling rotation relative to the rotary inertia I2 (see module notes).
+DRILL_INERTIA_FACTOR = 1e-6
 
 _XI = np.array([-1.0, 1.0, 1.0, -1.0])
 _ETA = np.array([-1.0, -1.0, 1.0, 1.0])
@@ -179,7 +185,8 @@ def mitc4_matrices(
     I0, I1, I2 = inertia[:, 0], inertia[:, 1], inertia[:, 2]
     m6 = np.zeros((n_el, 6, 6))
     m6[:, 0, 0] = m6[:, 1, 1] = m6[:, 2, 2] = I0
-    m6[:, 3, 3] = m6[:, 4, 4] = m6[:, 5, 5] = I2
+    m6[:, 3, 3] = m6[:, 4, 4] = I2
+    m6[:, 5, 5] = DRILL_INERTIA_FACTOR * I2
     m6[:, 0, 3] = m6[:, 3, 0] = I1
     m6[:, 1, 4] = m6[:, 4, 1] = I1
     P = np.zeros((6, 6))
