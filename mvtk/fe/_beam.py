@@ -393,21 +393,25 @@ def beam_element_matrices(
         )
     if len(sections) != len(xa):
         raise DimensionError(f"expected {len(xa)} sections (one per element), got {len(sections)}")
+    return _global_matrices(xa, xb, _section_array(sections), y_ref)
+
+
+_PROPS = ("EA", "GJ", "EIy", "EIz", "kGAz", "kGAy", "rhoA", "rhoIy", "rhoIz")
+
+
+def _section_array(sections: Sequence[BeamSection]) -> np.ndarray:
+    """(n, 9) array of the element-matrix properties of each section, in _PROPS order."""
+    return np.array([[getattr(s, k) for k in _PROPS] for s in sections], dtype=float)
+
+
+def _global_matrices(xa, xb, props, y_ref) -> tuple[np.ndarray, np.ndarray]:
     L, R = _element_frames(xa, xb, y_ref)
-
-    def prop(name):
-        return np.array([getattr(s, name) for s in sections])
-
-    K, M = timoshenko_element_matrices(
-        L, prop("EA"), prop("GJ"), prop("EIy"), prop("EIz"), prop("kGAz"), prop("kGAy"),
-        prop("rhoA"), prop("rhoIy"), prop("rhoIz"),
-    )
+    K, M = timoshenko_element_matrices(L, *props.T)
     T = np.zeros((len(L), 12, 12))
     for b in range(4):
         T[:, 3 * b:3 * b + 3, 3 * b:3 * b + 3] = R
-    K = np.einsum("eji,ejk,ekl->eil", T, K, T)
-    M = np.einsum("eji,ejk,ekl->eil", T, M, T)
-    return K, M
+    Tt = np.swapaxes(T, 1, 2)
+    return Tt @ K @ T, Tt @ M @ T
 
 
 # --------------------------------------------------------------------------- builder
@@ -631,22 +635,19 @@ def cantilever_beam(
     xm = 0.5 * (x[:-1] + x[1:])
 
     # section of every element: the base stack plus every patch covering its midpoint
-    stacks: dict[tuple, int] = {}
+    cover = np.array([(p.x0 < xm) & (xm < p.x1) for p in patches], dtype=bool).reshape(
+        len(patches), len(xm)).T
+    keys, el_sec = np.unique(cover, axis=0, return_inverse=True)
+    el_sec = el_sec.ravel().astype(np.int64)
     sections: list[BeamSection] = []
-    el_sec = np.empty(len(xm), dtype=np.int64)
-    for e, xe in enumerate(xm):
-        key = tuple(i for i, p in enumerate(patches) if p.x0 < xe < p.x1)
-        if key not in stacks:
-            stack = list(base)
-            for i in key:
-                p = patches[i]
-                stack = stack + list(p.layers) if p.side == "top" else list(p.layers) + stack
-            stacks[key] = len(sections)
-            sections.append(beam_section(stack, width, shear_correction))
-        el_sec[e] = stacks[key]
-
-    ke, me = beam_element_matrices(nodes[conn[:, 0]], nodes[conn[:, 1]],
-                                   [sections[i] for i in el_sec])
+    for key in keys:
+        stack = list(base)
+        for i in np.flatnonzero(key):
+            p = patches[i]
+            stack = stack + list(p.layers) if p.side == "top" else list(p.layers) + stack
+        sections.append(beam_section(stack, width, shear_correction))
+    props = _section_array(sections)[el_sec]
+    ke, me = _global_matrices(nodes[conn[:, 0]], nodes[conn[:, 1]], props, (0.0, 1.0, 0.0))
     edof = (conn[:, :, None] * 6 + np.arange(6)[None, None, :]).reshape(len(conn), 12)
     rows = np.repeat(edof, 12, axis=1).ravel()
     cols = np.tile(edof, (1, 12)).ravel()
