@@ -138,28 +138,44 @@ def _smooth_trial_scale(model: FEModel) -> float:
 
 
 def _lowest_modes(model: FEModel, n: int, sigma: float | None):
-    """Eigenpairs: shift 0 with the LU of K when K is positive definite (one
-    factorisation), else a negative shift through :func:`eigsh_lowest`."""
+    """Lowest eigenpairs by shift-invert Lanczos with one factorisation.
+
+    With ``sigma=None`` K is factorised; when it is positive definite (all pivots above
+    ``_SINGULAR_PIVOT`` of the largest) that LU is reused with shift 0, otherwise the
+    shift is -1 % of :func:`_smooth_trial_scale`. The sparse path is used even for small
+    models: a dense ``eigh(K, M)`` loses the lowest eigenvalues to round-off because the
+    token drilling inertia makes M ill-conditioned.
+    """
     import scipy.sparse.linalg as spla
 
     from ..errors import ConvergenceError
+    from ._solvers import EigenSolution
 
-    if sigma is not None or model.n_dof <= 400:
-        return eigsh_lowest(model.K, model.M, n, sigma=sigma)
-    try:
-        lu = factorize(model.K)
-        piv = lu.U.diagonal()
-        singular = bool(np.any(piv <= _SINGULAR_PIVOT * np.max(np.abs(piv))))
-    except ParameterError:
-        singular = True
-    if singular:
-        scale = _smooth_trial_scale(model)
-        shift = -1e-2 * scale if np.isfinite(scale) else None
-        return eigsh_lowest(model.K, model.M, n, sigma=shift)
     ndof = model.n_dof
+    if n >= ndof - 1:
+        return eigsh_lowest(model.K, model.M, n, sigma=sigma)
+    lu = None
+    if sigma is None:
+        try:
+            lu = factorize(model.K)
+            piv = lu.U.diagonal()
+            if np.any(piv <= _SINGULAR_PIVOT * np.max(np.abs(piv))):
+                lu = None
+        except ParameterError:
+            lu = None
+        if lu is not None:
+            sigma = 0.0
+        else:
+            scale = _smooth_trial_scale(model)
+            if not np.isfinite(scale):
+                d = model.K.diagonal() / model.M.diagonal()
+                scale = float(np.median(np.abs(d)))
+            sigma = -1e-2 * scale
+    if lu is None:
+        lu = factorize(model.K - sigma * model.M)
     opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
     try:
-        w, v = spla.eigsh(model.K, k=n, M=model.M, sigma=0.0, which="LM", OPinv=opinv,
+        w, v = spla.eigsh(model.K, k=n, M=model.M, sigma=sigma, which="LM", OPinv=opinv,
                           ncv=min(ndof, max(2 * n + 1, 20)))
     except spla.ArpackNoConvergence as err:
         raise ConvergenceError(
@@ -170,8 +186,6 @@ def _lowest_modes(model: FEModel, n: int, sigma: float | None):
     v = v / np.sqrt(np.einsum("ij,ij->j", v, model.M @ v))
     big = np.argmax(np.abs(v), axis=0)
     v = v * np.sign(v[big, np.arange(v.shape[1])])
-    from ._solvers import EigenSolution
-
     return EigenSolution(omega2=w, vectors=v)
 
 
