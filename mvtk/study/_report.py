@@ -261,7 +261,7 @@ def _section_se(rep: Report, res: StudyResult) -> None:
     sec.text("Retained nodes (nearest FE node to each configured point): " + "; ".join(
         f"{k} -> node {v}" for k, v in r["retained_nodes"].items()) + ".")
     if r.get("sizes"):
-        sizes = pd.DataFrame(r["sizes"])
+        sizes = pd.DataFrame(r["sizes"]).set_index("quantity")
         fe_s, se_s = _ref(res, "fe_sizes"), _ref(res, "se_sizes")
         if fe_s and se_s and len(sizes) == len(fe_s):
             sizes["paper FE"] = fe_s

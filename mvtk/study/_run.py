@@ -177,7 +177,8 @@ def run(
     from . import _stages as st
 
     meas = cfg.get("measurements", {})
-    do("ingest", (), bool(meas), [hashes, meas], lambda: st.ingest(study))
+    meas_hashes = {p.name: hashes[p.name] for p in study.measurement_files.values()}
+    do("ingest", (), bool(meas), [meas_hashes, meas], lambda: st.ingest(study))
     do("fe", (), True, [hashes[study.structure_file.name], cfg.get("fe", {})],
        lambda: st.fe_nominal(study))
     do("damping", ("ingest", "fe"), "damping" in cfg, [cfg.get("damping", {})],

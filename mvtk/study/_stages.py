@@ -251,7 +251,8 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
     result = {
         "retained_nodes": named,
         "retained_xyz": {k: model.nodes[v].tolist() for k, v in named.items()},
-        "sizes": ver.sizes.to_dataframe().to_dict(orient="list")
+        "sizes": ver.sizes.to_dataframe().rename_axis("quantity").reset_index()
+        .to_dict(orient="list")
         if hasattr(ver.sizes, "to_dataframe") else {},
         "modes": ver.modes.to_dataframe().to_dict(orient="list"),
         "static": ver.static.to_dataframe().to_dict(orient="list")
@@ -266,10 +267,13 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         # unit input); positive input bends the tip towards +z.
         load = dof_load(model, x1, "ry", 1.0) - dof_load(model, x0, "ry", 1.0)
         tip = named[ctl["sensor_node"]]
+        # modal form: shell drilling rotations of the boundary have no inertia, so the
+        # physical-form mass matrix is singular
         plant = structural_plant(se, inputs={"actuator": load},
                                  outputs={"tip": (tip, "uz")},
                                  alpha=float(model_damping["alpha"]),
-                                 beta=float(model_damping["beta"]),
+                                 beta=float(model_damping["beta"]), form="modal",
+                                 static_correction=False,  # all SE modes are kept
                                  input_units=["N m"], output_units=["m"])
         coords = list(plant.coords)
         ds = xr.Dataset({
@@ -278,6 +282,7 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
             "B": (("coord", "input"), plant.B),
             "Cq": (("output", "coord"), plant.Cq),
             "Cv": (("output", "coord"), plant.Cv),
+            "D": (("output", "input"), plant.D),
         }, coords={"coord": coords, "coord2": coords, "input": list(plant.inputs),
                    "output": list(plant.outputs)})
         fe_modes = modal_analysis(model, n_cmp)
@@ -287,17 +292,6 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
 
 
 # ---------------------------------------------------------------------------- control
-def _settling_time(t: np.ndarray, y: np.ndarray, band: float) -> float:
-    """Time after which |y| stays below ``band`` x the initial peak amplitude (s)."""
-    a0 = np.max(np.abs(y[: max(3, len(y) // 50)]))
-    above = np.nonzero(np.abs(y) > band * a0)[0]
-    if above.size == 0:
-        return 0.0
-    if above[-1] == len(y) - 1:
-        return float("inf")
-    return float(t[above[-1] + 1])
-
-
 def _amplitude_spectrum(y: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     n = len(y)
     a = np.abs(np.fft.rfft(y)) * 2.0 / n
@@ -308,54 +302,77 @@ def control(study: Study, plant_arrays, fn1_hz: float):
     """Open loop and each controller on the SE plant, released from mode 1."""
     import xarray as xr
 
-    from ..control import SecondOrderSystem
-    from ..control import _controllers as cc
-    from ..control._simulate import closed_loop, release_state, simulate
+    import mvtk.control as mc
+
+    from ..control import (  # noqa: F401 - looked up by name below
+        PPF,
+        SRF,
+        LyapunovBangBang,
+        StructuralPlant,
+        VelocityFeedback,
+        added_damping,
+        closed_loop_modes,
+        release_state,
+        settling_time,
+        simulate,
+    )
 
     cfg = study.section("control")
     pa = plant_arrays
-    plant = SecondOrderSystem(
+    plant = StructuralPlant(
         pa["M"].values, pa["C"].values, pa["K"].values, pa["B"].values, pa["Cq"].values,
         pa["Cv"].values, inputs=[str(v) for v in pa["input"].values],
         outputs=[str(v) for v in pa["output"].values],
         coords=[str(v) for v in pa["coord"].values], input_units=["N m"],
-        output_units=["m"],
+        output_units=["m"], D=pa["D"].values,
     )
     x0 = release_state(plant, 1, "tip", float(cfg["initial_tip_displacement_m"]))
     t_end, fs = float(cfg["t_end_s"]), float(cfg["fs_out"])
     band = float(cfg["settle_band"])
     runs = {"open loop": None}
+    methods = {"open loop": "auto"}
+    open_sim = simulate(plant, None, t_end=t_end, fs_out=fs, initial=x0)
+    n = plant.n_coords
+    # generalised actuator force times velocity, B' q', of the open loop (for a boundary
+    # layer given relative to its initial amplitude)
+    switching = plant.B[:, 0] @ open_sim["states"].values[n:, :]
+    switching_peak = float(np.max(np.abs(switching)))
     for c in cfg.get("controllers", []):
         kind = c["type"]
         if kind in ("PPF", "SRF"):
-            ctrl = getattr(cc, kind)(targets=[(float(c["f_hz"]), float(c["zeta_f"]),
+            ctrl = getattr(mc, kind)(targets=[(float(c["f_hz"]), float(c["zeta_f"]),
                                                float(c["gain"]))],
                                      u_max=c.get("u_max"))
         elif kind == "VelocityFeedback":
-            ctrl = cc.VelocityFeedback(float(c["gain"]), u_max=c.get("u_max"))
+            ctrl = VelocityFeedback(float(c["gain"]), u_max=c.get("u_max"))
         else:
-            ctrl = cc.LyapunovBangBang(u_max=float(c["u_max"]),
-                                       boundary_layer=float(c["boundary_layer"]))
+            eps = (float(c["boundary_layer"]) if "boundary_layer" in c
+                   else float(c["boundary_layer_rel"]) * switching_peak)
+            ctrl = LyapunovBangBang(u_max=float(c["u_max"]), boundary_layer=eps)
         runs[str(c["name"])] = ctrl
+        methods[str(c["name"])] = str(c.get("method", "auto"))
     rows, series, inputs = [], {}, {}
-    w1 = 2 * np.pi * fn1_hz
+    amp0 = float(cfg["initial_tip_displacement_m"])
     t = None
     for name, ctrl in runs.items():
-        sim = simulate(plant, ctrl, t_end=t_end, fs_out=fs, initial=x0)
+        sim = open_sim if ctrl is None else simulate(plant, ctrl, t_end=t_end, fs_out=fs,
+                                                     initial=x0, method=methods[name])
         y = sim["outputs"].sel(output="tip").values
         u = sim["inputs"].values[0] if "inputs" in sim else np.zeros_like(y)
         t = sim["time"].values
         series[name], inputs[name] = y, u
-        zeta_cl = float("nan")
-        if ctrl is None or getattr(ctrl, "u_max", None) is None and kind_linear(ctrl):
-            ss = plant.to_state_space() if ctrl is None else closed_loop(plant, ctrl)
-            p = ss.poles()
-            p = p[np.imag(p) > 0]
-            k = int(np.argmin(np.abs(np.abs(p) - w1)))
-            zeta_cl = float(-np.real(p[k]) / np.abs(p[k]))
+        zeta_cl = fn_cl = float("nan")
+        if ctrl is None:
+            om = closed_loop_modes(plant)
+            osc = om.eigenvalues.imag > 0
+            zeta_cl, fn_cl = float(om.zeta[osc][0]), float(om.fn_hz[osc][0])
+        elif kind_linear(ctrl) and getattr(ctrl, "u_max", None) is None:
+            ad = added_damping(plant, ctrl, 1)
+            zeta_cl, fn_cl = ad["zeta_closed"], ad["fn_hz_closed"]
         f, a = _amplitude_spectrum(y, fs)
-        rows.append({"controller": name, "settling_time_s": _settling_time(t, y, band),
-                     "zeta_mode1": zeta_cl,
+        rows.append({"controller": name,
+                     "settling_time_s": settling_time(y, t, band=band, reference=amp0),
+                     "zeta_mode1": zeta_cl, "fn_mode1_hz": fn_cl,
                      "peak_tip_m_after_1s": float(np.max(np.abs(y[t >= 1.0]))),
                      "peak_actuator_Nm": float(np.max(np.abs(u))),
                      "spectrum_peak_m": float(np.max(a[(f > 0.8 * fn1_hz) & (f < 1.2 * fn1_hz)]))})
@@ -370,7 +387,9 @@ def control(study: Study, plant_arrays, fn1_hz: float):
                       np.array([_amplitude_spectrum(series[k], fs)[1] for k in series]))},
         coords={"run": list(series), "time": t, "frequency": f},
     )
-    return {"metrics": rows, "settle_band": band, "fs_out": fs, "t_end_s": t_end}, ds
+    return {"metrics": rows, "settle_band": band, "fs_out": fs, "t_end_s": t_end,
+            "switching_peak": switching_peak,
+            "controllers": {k: repr(v) for k, v in runs.items()}}, ds
 
 
 def kind_linear(ctrl) -> bool:
