@@ -8,9 +8,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import DataRepairWarning, FormatError, MissingDependencyError, ParameterError
+from ..errors import (
+    DataRepairWarning,
+    FormatError,
+    MissingDependencyError,
+    MvtkError,
+    ParameterError,
+)
 from ._arrays import build_from_arrays
 from ._build import assemble, clean_attrs
+from ._mat5 import check_mat5
 from ._model import fs_from_dt, normalize_units, time_history
 from ._netcdf import HDF5_MAGIC, read_netcdf
 
@@ -111,17 +118,10 @@ def read_mat(
             return build_from_arrays(path, lambda k: np.asarray(fh5[k][()]).T, names, **opts)
     import scipy.io
 
+    check_mat5(path, path.read_bytes())
     try:
         content = scipy.io.loadmat(path, squeeze_me=False)
-    except (
-        ValueError,
-        TypeError,
-        OSError,
-        EOFError,
-        IndexError,
-        KeyError,
-        NotImplementedError,
-    ) as err:
+    except Exception as err:  # scipy raises many kinds on damaged files
         raise FormatError(
             f"{path}: not a readable MAT v5 file ({type(err).__name__}: {err})"
         ) from err
@@ -176,71 +176,76 @@ def read_hdf5(
         fh5 = h5py.File(path, "r")
     except OSError as err:
         raise FormatError(f"{path}: not a readable HDF5 file ({err})") from err
-    with fh5:
-        if data is None and _is_netcdf4(fh5):
-            netcdf = True
+    try:
+        with fh5:
+            ds = _read_hdf5_open(path, fh5, data, time, fs, dt, channels, units, quantity)
+    except MvtkError:
+        raise
+    except (KeyError, RuntimeError, OSError, ValueError, TypeError) as err:
+        raise FormatError(f"{path}: damaged HDF5 file ({type(err).__name__}: {err})") from err
+    return read_netcdf(path) if ds is None else ds
+
+
+def _read_hdf5_open(path, fh5, data, time, fs, dt, channels, units, quantity):
+    import h5py
+
+    if data is None and _is_netcdf4(fh5):
+        return None
+    paths: list[str] = []
+    fh5.visititems(lambda name, obj: paths.append(name) if isinstance(obj, h5py.Dataset) else None)
+
+    def get(name):
+        return fh5[name][()]
+
+    if data is None:
+        cands = [p for p in paths if p.split("/")[-1] == "data" and fh5[p].ndim == 2]
+        if len(cands) != 1:
+            raise FormatError(
+                f"{path}: cannot tell which dataset holds the samples; expected "
+                f"data='<path>' among: {', '.join(paths)}"
+            )
+        data = cands[0]
+    group = data.rsplit("/", 1)[0] + "/" if "/" in data else ""
+    if time is None and fs is None and dt is None:
+        for cand in ("time", "t"):
+            if group + cand in paths:
+                time = group + cand
+                break
+        for cand in ("sample_rate", "sampling_rate", "fs"):
+            if group + cand in paths:
+                fs = group + cand
+                break
+    if channels is None and group + "channel_names" in paths:
+        channels = group + "channel_names"
+    if isinstance(channels, str):
+        raw = np.asarray(get(channels)).reshape(-1)
+        channels = [c.decode("utf-8") if isinstance(c, bytes) else str(c) for c in raw]
+    if units is None:
+        for cand in ("units", "channel_units"):
+            if group + cand in paths:
+                raw = np.asarray(get(group + cand)).reshape(-1)
+                units = [u.decode("utf-8") if isinstance(u, bytes) else str(u) for u in raw]
+                break
         else:
-            netcdf = False
-            paths: list[str] = []
-            fh5.visititems(
-                lambda name, obj: paths.append(name) if isinstance(obj, h5py.Dataset) else None
-            )
-
-            def get(name):
-                value = fh5[name][()]
-                return value
-
-            if data is None:
-                cands = [p for p in paths if p.split("/")[-1] == "data" and fh5[p].ndim == 2]
-                if len(cands) != 1:
-                    raise FormatError(
-                        f"{path}: cannot tell which dataset holds the samples; expected "
-                        f"data='<path>' among: {', '.join(paths)}"
-                    )
-                data = cands[0]
-            group = data.rsplit("/", 1)[0] + "/" if "/" in data else ""
-            if time is None and fs is None and dt is None:
-                for cand in ("time", "t"):
-                    if group + cand in paths:
-                        time = group + cand
-                        break
-                for cand in ("sample_rate", "sampling_rate", "fs"):
-                    if group + cand in paths:
-                        fs = group + cand
-                        break
-            if channels is None and group + "channel_names" in paths:
-                channels = group + "channel_names"
-            if isinstance(channels, str):
-                raw = np.asarray(get(channels)).reshape(-1)
-                channels = [c.decode("utf-8") if isinstance(c, bytes) else str(c) for c in raw]
-            if units is None:
-                for cand in ("units", "channel_units"):
-                    if group + cand in paths:
-                        raw = np.asarray(get(group + cand)).reshape(-1)
-                        units = [u.decode("utf-8") if isinstance(u, bytes) else str(u) for u in raw]
-                        break
-                else:
-                    attr = fh5[data].attrs.get("units")
-                    if attr is not None:
-                        units = [
-                            u.decode() if isinstance(u, bytes) else str(u)
-                            for u in np.asarray(attr).reshape(-1)
-                        ]
-            return build_from_arrays(
-                path,
-                get,
-                paths,
-                data=data,
-                time=time,
-                fs=fs,
-                dt=dt,
-                channels=channels,
-                units=units,
-                quantity=quantity,
-                attrs={"hdf5_data": data},
-            )
-    if netcdf:
-        return read_netcdf(path)
+            attr = fh5[data].attrs.get("units")
+            if attr is not None:
+                units = [
+                    u.decode() if isinstance(u, bytes) else str(u)
+                    for u in np.asarray(attr).reshape(-1)
+                ]
+    return build_from_arrays(
+        path,
+        get,
+        paths,
+        data=data,
+        time=time,
+        fs=fs,
+        dt=dt,
+        channels=channels,
+        units=units,
+        quantity=quantity,
+        attrs={"hdf5_data": data},
+    )
 
 
 class _Collect(logging.Handler):
@@ -390,7 +395,7 @@ def read_wav(path: Path, *, calibration=None, units=None, quantity=None, channel
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             rate, samples = scipy.io.wavfile.read(path, mmap=False)
-    except (ValueError, EOFError, OSError, IndexError, KeyError, TypeError) as err:
+    except Exception as err:  # scipy raises struct.error, ZeroDivisionError... on damage
         raise FormatError(f"{path}: not a readable WAV file ({type(err).__name__}: {err})") from err
     for w in caught:
         raise FormatError(f"{path}: damaged WAV file: {w.message}")
