@@ -131,7 +131,10 @@ def set_by_path(d: Mapping, path: str, value: Any) -> dict:
     """Copy of ``d`` with the entry at dotted ``path`` replaced by ``value``."""
     out = copy.deepcopy(dict(d))
     parts = path.split(".")
-    parent = get_by_path(out, ".".join(parts[:-1])) if len(parts) > 1 else out
+    try:
+        parent = get_by_path(out, ".".join(parts[:-1])) if len(parts) > 1 else out
+    except ConfigError as err:
+        raise ConfigError(f"no entry {path!r} in the structure ({err})") from None
     last = parts[-1]
     if isinstance(parent, list):
         try:

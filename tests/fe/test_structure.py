@@ -1,0 +1,145 @@
+"""Structure TOML -> build_model, its validation, the smart beam and `mvtk modes`."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvtk.errors import ConfigError
+from mvtk.fe import build_model, get_by_path, load_structure, modal_analysis, set_by_path
+
+DATA = Path(__file__).resolve().parents[2] / "data" / "structures"
+
+
+def _strip() -> dict:
+    return {
+        "materials": {"steel": {"E": 210e9, "nu": 0.3, "rho": 7900.0}},
+        "structure": {"type": "plate", "length": 0.2, "width": 0.02,
+                      "layers": [{"material": "steel", "thickness": 1e-3}]},
+        "mesh": {"nx": 20, "ny": 2},
+        "boundary": {"clamp": "x0"},
+        "points": [{"name": "tip", "x": 0.2, "y": 0.01}],
+    }
+
+
+def test_smart_beam_nominal_modes():
+    model = build_model(DATA / "smart_beam.toml")
+    res = modal_analysis(model, 4)
+    assert 13.0 < res.fn_hz[0] < 15.0 and res.mode_type[0] == "bending"
+    assert 40.0 < res.fn_hz[1] < 45.0 and res.mode_type[1] == "torsion"
+    for name in ("x0", "x1", "tip", "sensor", "patch:pzt", "patch:pzt:x0", "patch:pzt:x1",
+                 "patch:pzt:y0", "patch:pzt:y1"):
+        assert len(model.node_set(name)) >= 1
+    assert model.meta["structure"]["structure"]["length"] == 0.18
+    # the patch stiffens and adds mass; the section there is unsymmetric (B != 0)
+    lam = model.meta["laminates"][1]
+    assert abs(lam.B[0, 0]) > 0 and lam.I1 > 0
+
+
+def test_benchmark_plate_file_matches_leissa():
+    model = build_model(DATA / "plate.toml")
+    f1 = modal_analysis(model, 1).fn_hz[0]
+    E, h, rho, a, nu = 70e9, 3e-3, 2700.0, 0.3, 0.3
+    D = E * h**3 / (12 * (1 - nu**2))
+    lam1 = 2 * np.pi * f1 * a**2 * np.sqrt(rho * h / D)
+    assert lam1 == pytest.approx(3.492, rel=0.01)  # Leissa (1969) Table 4.50
+
+
+def test_build_is_deterministic_and_perturbable():
+    s = _strip()
+    m1, m2 = build_model(s), build_model(s)
+    assert (m1.K != m2.K).nnz == 0 and (m1.M != m2.M).nnz == 0
+    s2 = set_by_path(s, "materials.steel.E", 1.1 * 210e9)
+    assert s["materials"]["steel"]["E"] == 210e9  # the original is untouched
+    f1 = modal_analysis(m1, 1).fn_hz[0]
+    f2 = modal_analysis(build_model(s2), 1).fn_hz[0]
+    assert f2 / f1 == pytest.approx(np.sqrt(1.1), rel=1e-6)
+    s3 = set_by_path(s, "structure.layers.0.thickness", 2e-3)
+    assert get_by_path(s3, "structure.layers.0.thickness") == 2e-3
+    f3 = modal_analysis(build_model(s3), 1).fn_hz[0]
+    assert f3 / f1 == pytest.approx(2.0, rel=2e-3)
+    s4 = dict(s, boundary={"clamp": "x0", "clamp_stiffness": 10.0})
+    assert modal_analysis(build_model(s4), 1).fn_hz[0] < f1
+    with pytest.raises(ConfigError, match="no entry 'materials.alu.E'"):
+        set_by_path(s, "materials.alu.E", 1.0)
+
+
+def test_orthotropic_and_piezo_materials_and_element_size():
+    s = _strip()
+    s["materials"]["cf"] = {"E1": 140e9, "E2": 10e9, "G12": 5e9, "G13": 5e9, "G23": 3.5e9,
+                            "nu12": 0.3, "rho": 1600.0}
+    s["materials"]["pzt"] = {"E": 66.667e9, "nu": 0.34, "rho": 7800.0, "d31": -210e-12}
+    s["structure"]["layers"] = [{"material": "cf", "thickness": 0.5e-3, "angle": 0.0},
+                                {"material": "cf", "thickness": 0.5e-3, "angle": 90.0}]
+    s["patches"] = [{"name": "a", "x0": 0.0, "x1": 0.05, "y0": 0.0, "y1": 0.02,
+                     "layers": [{"material": "pzt", "thickness": 0.25e-3}]}]
+    s["mesh"] = {"element_size": 0.01}
+    model = build_model(s)
+    assert model.meta["laminates"][0].plies[1].angle_deg == 90.0
+    assert model.meta["laminates"][1].plies[-1].material.d31 == -210e-12
+    assert len(model.meta["x_lines"]) == 21
+
+
+@pytest.mark.parametrize("path, value, message", [
+    ("structure.length", -1.0, r"structure\.length: expected a positive number"),
+    ("structure.layers.0.material", "alu", r"structure\.layers\[0\]\.material: 'alu' is not"),
+    ("structure.layers.0.thickness", "1mm", r"structure\.layers\[0\]\.thickness: expected a"),
+    ("materials.steel.nu", 0.7, r"materials\.steel: .*Poisson ratio"),
+    ("materials.steel.E", 0, r"materials\.steel\.E: expected a positive number"),
+    ("structure.type", "shell", r"structure\.type: expected 'plate'"),
+    ("boundary.clamp", "left", r"boundary\.clamp: expected one of x0"),
+    ("mesh.nx", 2.5, r"mesh\.nx: expected a positive integer"),
+])
+def test_config_errors_name_the_key(path, value, message):
+    with pytest.raises(ConfigError, match=message):
+        build_model(set_by_path(_strip(), path, value))
+
+
+def test_config_errors_structure():
+    s = _strip()
+    s["extra"] = 1
+    with pytest.raises(ConfigError, match=r"unknown top-level keys \['extra'\]"):
+        build_model(s)
+    s = _strip()
+    del s["mesh"]
+    with pytest.raises(ConfigError, match="mesh: missing"):
+        build_model(s)
+    s = _strip()
+    s["boundary"]["edges"] = {"y0": "glued"}
+    with pytest.raises(ConfigError, match="unknown support type 'glued' on edge 'y0'"):
+        build_model(s)
+    s = _strip()
+    s["patches"] = [{"name": "p", "x0": 0.1, "x1": 0.3, "y0": 0.0, "y1": 0.02,
+                     "layers": [{"material": "steel", "thickness": 1e-3}]}]
+    with pytest.raises(ConfigError, match="patch 'p' extent"):
+        build_model(s)
+
+
+def test_load_structure_errors(tmp_path):
+    with pytest.raises(ConfigError, match="not found"):
+        load_structure(tmp_path / "none.toml")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[structure\nlength = 1")
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        build_model(bad)
+
+
+def test_cli_modes_json_and_table(capsys):
+    from mvtk.cli import main
+
+    assert main(["modes", str(DATA / "smart_beam.toml"), "-n", "3", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert len(out["fn_hz"]) == 3 and out["n_dof"] > 1000
+    assert 13.0 < out["fn_hz"][0] < 15.0
+    assert out["mode_type"][:2] == ["bending", "torsion"]
+    assert main(["modes", str(DATA / "plate.toml"), "-n", "2"]) == 0
+    text = capsys.readouterr().out
+    assert "fn_hz" in text and "bending" in text and "DOF" in text
+
+
+def test_cli_modes_error_exit_code(tmp_path, capsys):
+    from mvtk.cli import main
+
+    assert main(["modes", str(tmp_path / "missing.toml")]) == 2
+    assert "not found" in capsys.readouterr().err
