@@ -54,6 +54,7 @@ def plot_frf(
     f_range: tuple[float, float] | None = None,
     ylabel: str = "|H|",
     title: str = "",
+    markers: bool = False,
 ):
     """FRF magnitude (log) with half-power bands marked.
 
@@ -68,6 +69,8 @@ def plot_frf(
         annotated.
     f_range : (f_min, f_max), optional
         Plotted frequency range in Hz.
+    markers : bool
+        Mark every frequency line (shows the resolution across a half-power band).
     """
     f = _vec("f_hz", f_hz)
     h = np.abs(_vec("H", H))
@@ -75,7 +78,8 @@ def plot_frf(
         raise DimensionError(f"H has {h.size} values but f_hz has {f.size}")
     fig = _figure()
     ax = fig.add_subplot()
-    ax.semilogy(f, h, lw=1.0, color="C0", label="FRF")
+    ax.semilogy(f, h, lw=1.0, color="C0", label="FRF", marker="o" if markers else None,
+                ms=3)
     for i, (lo, hi, fn) in enumerate(bands):
         ax.axvspan(lo, hi, color="C3", alpha=0.25, label="half-power band" if i == 0 else None)
         ax.axvline(fn, color="C3", lw=0.8, ls="--")
