@@ -167,18 +167,25 @@ def _check_layers(layers: Sequence[Ply], where: str) -> tuple[Ply, ...]:
 
 
 def beam_section(
-    layers: Sequence[Ply], width: float, shear_correction: float = SHEAR_CORRECTION
+    layers: Sequence[Ply],
+    width: float,
+    shear_correction: float = SHEAR_CORRECTION,
+    layer_widths: Sequence[float] | None = None,
 ) -> BeamSection:
     """Section properties of a stack of plies of equal width, bottom to top.
 
     Parameters
     ----------
     layers : sequence of Ply
-        Layers from the bottom (z = 0) to the top, all of width ``width``.
+        Layers from the bottom (z = 0) to the top, all of width ``width`` unless
+        ``layer_widths`` is given.
     width : float
-        Section width along y, m.
+        Section width along y, m (the width recorded in the section).
     shear_correction : float
         Shear correction factor k applied to both shear areas (default 5/6).
+    layer_widths : sequence of float, optional
+        Width of each layer (m), all centred on y = 0, e.g. a piezo patch narrower than
+        the beam. Every sum below then uses ``b_k`` in place of ``b``.
 
     Returns
     -------
@@ -206,12 +213,28 @@ def beam_section(
       deformation; the exact layered shear factor is not computed).
     - Inertia: ``rhoA = sum rho_k b t_k``, ``rhoIy = sum rho_k b int (z - z_n)^2 dz``,
       ``rhoIz = sum rho_k t_k b^3 / 12``.
+    - With unequal ``layer_widths`` the torsion stiffness is an approximation:
+      ``GJ = 4 sum_k b_k D66_k * J(b_max, t) / (b_max t^3 / 3)`` (layer twisting
+      stiffnesses about the common centroid, with the thin-rectangle correction of the
+      widest layer); everything else stays exact for the stacked rectangles.
     """
     layers = _check_layers(layers, "beam_section")
     b = float(width)
     if not (np.isfinite(b) and b > 0):
         raise ParameterError(f"beam_section: width must be a positive length in m, got {width!r}")
     t = np.array([p.thickness for p in layers], dtype=float)
+    if layer_widths is None:
+        bk = np.full(len(layers), b)
+    else:
+        bk = np.asarray(layer_widths, dtype=float)
+        if bk.shape != (len(layers),):
+            raise DimensionError(
+                f"beam_section: expected {len(layers)} layer widths, got shape {bk.shape}"
+            )
+        if not np.all(np.isfinite(bk) & (bk > 0)):
+            raise ParameterError(
+                f"beam_section: layer widths must be positive lengths in m, got {bk.tolist()}"
+            )
     z1 = np.cumsum(t)
     z0 = z1 - t
     E = np.array([ply_axial_modulus(p) for p in layers])
@@ -219,28 +242,29 @@ def beam_section(
     g_xz, g_xy = shear[:, 0], shear[:, 1]
     rho = np.array([p.material.rho for p in layers], dtype=float)
 
-    EA = float(np.sum(E * t) * b)
-    zn = float(np.sum(E * (z1**2 - z0**2) / 2.0) * b / EA)
+    EA = float(np.sum(E * t * bk))
+    zn = float(np.sum(E * bk * (z1**2 - z0**2) / 2.0) / EA)
     second = ((z1 - zn) ** 3 - (z0 - zn) ** 3) / 3.0
-    EIy = float(np.sum(E * second) * b)
-    EIz = float(np.sum(E * t) * b**3 / 12.0)
-    # torsion: twisting stiffness D66 about the G-weighted centroid
-    zg = float(np.sum(g_xy * (z1**2 - z0**2) / 2.0) / np.sum(g_xy * t))
-    d66 = float(np.sum(g_xy * ((z1 - zg) ** 3 - (z0 - zg) ** 3) / 3.0))
+    EIy = float(np.sum(E * second * bk))
+    EIz = float(np.sum(E * t * bk**3) / 12.0)
+    # torsion: twisting stiffness 4 b D66 about the G-weighted centroid, thin-rectangle
+    # correction of the widest layer (exact Saint-Venant value for equal widths)
+    zg = float(np.sum(g_xy * bk * (z1**2 - z0**2) / 2.0) / np.sum(g_xy * bk * t))
+    bd66 = float(np.sum(g_xy * bk * ((z1 - zg) ** 3 - (z0 - zg) ** 3) / 3.0))
     h = float(z1[-1])
-    g_eff = 12.0 * d66 / h**3
-    GJ = g_eff * _rect_torsion_factor(b, h)
+    bmax = float(bk.max())
+    GJ = 4.0 * bd66 * _rect_torsion_factor(bmax, h) / (bmax * h**3 / 3.0)
     k = float(shear_correction)
     if not (np.isfinite(k) and 0 < k <= 1):
         raise ParameterError(
             f"beam_section: shear_correction must be in (0, 1], got {shear_correction!r}"
         )
-    kGAz = k * float(np.sum(g_xz * t)) * b
-    kGAy = k * float(np.sum(g_xy * t)) * b
-    rhoA = float(np.sum(rho * t) * b)
-    rhoIy = float(np.sum(rho * second) * b)
-    rhoIz = float(np.sum(rho * t) * b**3 / 12.0)
-    zm = float(np.sum(rho * (z1**2 - z0**2) / 2.0) * b / rhoA)
+    kGAz = k * float(np.sum(g_xz * t * bk))
+    kGAy = k * float(np.sum(g_xy * t * bk))
+    rhoA = float(np.sum(rho * t * bk))
+    rhoIy = float(np.sum(rho * second * bk))
+    rhoIz = float(np.sum(rho * t * bk**3) / 12.0)
+    zm = float(np.sum(rho * bk * (z1**2 - z0**2) / 2.0) / rhoA)
     return BeamSection(
         width=b, thickness=h, neutral_axis=zn, EA=EA, EIy=EIy, EIz=EIz, GJ=GJ,
         kGAz=kGAz, kGAy=kGAy, rhoA=rhoA, rhoIy=rhoIy, rhoIz=rhoIz, mass_offset=zm - zn,
@@ -431,6 +455,8 @@ class BeamPatch:
         Whether the extra layers sit on top of the base stack (listed bottom to top,
         first one touching the base) or below it (listed bottom to top, last one
         touching the base).
+    width : float, optional
+        Width of the patch layers (m), centred on the beam axis; default the beam width.
     """
 
     name: str
@@ -438,12 +464,17 @@ class BeamPatch:
     x1: float
     layers: tuple[Ply, ...] = field(default_factory=tuple)
     side: str = "top"
+    width: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", _check_layers(self.layers, f"patch {self.name!r}"))
         if self.side not in ("top", "bottom"):
             raise ParameterError(
                 f"patch {self.name!r}: side must be 'top' or 'bottom', got {self.side!r}"
+            )
+        if self.width is not None and not (np.isfinite(self.width) and self.width > 0):
+            raise ParameterError(
+                f"patch {self.name!r}: width must be a positive length in m, got {self.width!r}"
             )
         if not (np.isfinite(self.x0) and np.isfinite(self.x1) and self.x0 < self.x1):
             raise ParameterError(
@@ -459,7 +490,7 @@ def _as_patch(p) -> BeamPatch:
             return BeamPatch(**p)
         except TypeError as err:
             raise ParameterError(
-                f"patch {dict(p)!r}: expected keys name, x0, x1, layers[, side] ({err})"
+                f"patch {dict(p)!r}: expected keys name, x0, x1, layers[, side, width] ({err})"
             ) from err
     raise ParameterError(f"patches must be BeamPatch or mappings, got {type(p).__name__}")
 
@@ -580,7 +611,9 @@ def cantilever_beam(
         patch), one set per named point, ``"all"``.
         ``elements["beam2"]`` is the (n_el, 2) connectivity. ``meta`` holds
         ``"kind"``, ``"length"``, ``"width"``, ``"sections"`` (list of
-        :meth:`BeamSection.as_dict`), ``"element_section"`` (section index per element),
+        :meth:`BeamSection.as_dict`), ``"section_layers"`` and ``"section_layer_widths"``
+        (the ply stack and layer widths of each section, bottom to top),
+        ``"element_section"`` (section index per element),
         ``"clamp"``, ``"clamp_stiffness"`` and ``"patches"``.
 
     Raises
@@ -640,12 +673,18 @@ def cantilever_beam(
     keys, el_sec = np.unique(cover, axis=0, return_inverse=True)
     el_sec = el_sec.ravel().astype(np.int64)
     sections: list[BeamSection] = []
+    stacks: list[tuple[tuple[Ply, ...], tuple[float, ...]]] = []
     for key in keys:
-        stack = list(base)
+        stack, widths = list(base), [float(width)] * len(base)
         for i in np.flatnonzero(key):
             p = patches[i]
-            stack = stack + list(p.layers) if p.side == "top" else list(p.layers) + stack
-        sections.append(beam_section(stack, width, shear_correction))
+            pw = [float(width if p.width is None else p.width)] * len(p.layers)
+            if p.side == "top":
+                stack, widths = stack + list(p.layers), widths + pw
+            else:
+                stack, widths = list(p.layers) + stack, pw + widths
+        stacks.append((tuple(stack), tuple(widths)))
+        sections.append(beam_section(stack, width, shear_correction, layer_widths=widths))
     props = _section_array(sections)[el_sec]
     ke, me = _global_matrices(nodes[conn[:, 0]], nodes[conn[:, 1]], props, (0.0, 1.0, 0.0))
     edof = (conn[:, :, None] * 6 + np.arange(6)[None, None, :]).reshape(len(conn), 12)
@@ -702,6 +741,8 @@ def cantilever_beam(
         "length": L,
         "width": float(width),
         "sections": [s.as_dict() for s in sections],
+        "section_layers": [st for st, _ in stacks],
+        "section_layer_widths": [w for _, w in stacks],
         "element_section": el_sec,
         "clamp": clamp,
         "clamp_stiffness": (
@@ -709,6 +750,7 @@ def cantilever_beam(
         ),
         "patches": [
             {"name": p.name, "x0": float(p.x0), "x1": float(p.x1), "side": p.side,
+             "width": float(width if p.width is None else p.width),
              "layers": [(q.material.name, float(q.thickness), float(q.angle_deg))
                         for q in p.layers]}
             for p in patches

@@ -58,7 +58,18 @@ def _layer_bounds(layers: Sequence[Ply]) -> tuple[np.ndarray, np.ndarray]:
     return z1 - t, z1
 
 
-def neutral_axis(layers: Sequence[Ply]) -> float:
+def _widths(layers: Sequence[Ply], widths, where: str) -> np.ndarray:
+    if widths is None:
+        return np.ones(len(layers))
+    w = np.asarray(widths, dtype=float)
+    if w.shape != (len(layers),):
+        raise DimensionError(f"{where}: expected {len(layers)} layer widths, got shape {w.shape}")
+    if not np.all(np.isfinite(w) & (w > 0)):
+        raise ParameterError(f"{where}: layer widths must be positive (m), got {w.tolist()}")
+    return w
+
+
+def neutral_axis(layers: Sequence[Ply], widths: Sequence[float] | None = None) -> float:
     """Height of the neutral axis above the bottom of a layer stack (m).
 
     The paper's eq. 6 generalised to N layers of equal width:
@@ -70,6 +81,9 @@ def neutral_axis(layers: Sequence[Ply]) -> float:
     ----------
     layers : sequence of Ply
         Bottom to top.
+    widths : sequence of float, optional
+        Layer widths (m) when they differ (e.g. a patch narrower than the beam); each
+        term is then weighted by ``b_k``. Default: equal widths.
 
     Returns
     -------
@@ -77,13 +91,15 @@ def neutral_axis(layers: Sequence[Ply]) -> float:
         ``D`` in m, measured from the bottom of the first layer.
     """
     layers = _check_layers(layers, "neutral_axis")
+    b = _widths(layers, widths, "neutral_axis")
     z0, z1 = _layer_bounds(layers)
     E = np.array([ply_axial_modulus(p) for p in layers])
-    return float(np.sum(E * (z1**2 - z0**2)) / (2.0 * np.sum(E * (z1 - z0))))
+    return float(np.sum(E * b * (z1**2 - z0**2)) / (2.0 * np.sum(E * b * (z1 - z0))))
 
 
 def piezo_moment_per_volt(
-    layers: Sequence[Ply], piezo_index: int, width: float = 1.0
+    layers: Sequence[Ply], piezo_index: int, width: float = 1.0,
+    widths: Sequence[float] | None = None,
 ) -> float:
     """Bending moment per volt of one piezo layer about the composite neutral axis.
 
@@ -103,6 +119,10 @@ def piezo_moment_per_volt(
     width : float
         Patch width b in m. The default 1.0 gives the moment per metre of width,
         N m/(V m).
+    widths : sequence of float, optional
+        Widths of all layers (m) when they differ, e.g. a patch narrower than the
+        substrate; ``D`` then accounts for them and ``b = widths[piezo_index]``
+        (``width`` must then be left at its default).
 
     Returns
     -------
@@ -127,7 +147,14 @@ def piezo_moment_per_volt(
     b = float(width)
     if not (np.isfinite(b) and b > 0):
         raise ParameterError(f"piezo_moment_per_volt: width must be positive (m), got {width!r}")
-    D = neutral_axis(layers)
+    if widths is not None:
+        if b != 1.0:
+            raise ParameterError(
+                "piezo_moment_per_volt: give either width or widths, not both "
+                f"(width={width!r}, widths={list(widths)!r})"
+            )
+        b = float(_widths(layers, widths, "piezo_moment_per_volt")[idx])
+    D = neutral_axis(layers, widths)
     z0, z1 = _layer_bounds(layers)
     tp = z1[idx] - z0[idx]
     Ep = ply_axial_modulus(layers[idx])
@@ -288,6 +315,28 @@ def edge_moment_load(
     return f
 
 
+def _stack_under_patch(model: FEModel, patch_name: str):
+    """(layers, widths) of the section under a cantilever_beam patch, from model.meta."""
+    info = [p for p in model.meta.get("patches", []) if p.get("name") == patch_name]
+    if not info or "section_layers" not in model.meta:
+        raise ParameterError(
+            f"patch {patch_name!r}: the model has no such beam patch in meta['patches']; "
+            "pass layers= explicitly"
+        )
+    x = model.nodes[:, 0]
+    conn = model.elements["beam2"]
+    xm = 0.5 * (x[conn[:, 0]] + x[conn[:, 1]])
+    inside = (xm > info[0]["x0"]) & (xm < info[0]["x1"])
+    secs = np.unique(np.asarray(model.meta["element_section"])[inside])
+    if secs.size != 1:
+        raise ParameterError(
+            f"patch {patch_name!r} overlaps other patches ({secs.size} different sections "
+            "under it); pass layers= and piezo_index= explicitly"
+        )
+    s = int(secs[0])
+    return tuple(model.meta["section_layers"][s]), tuple(model.meta["section_layer_widths"][s])
+
+
 @dataclass(frozen=True)
 class PiezoPatch:
     """A piezo patch actuator on an FE model.
@@ -302,9 +351,12 @@ class PiezoPatch:
     edges : tuple (edge_a, edge_b)
         Node-set names or node-index arrays of the patch edges, edge a at smaller x.
     width : float
-        Patch width b (m).
+        Patch width b (m), the width of the piezo layer.
     component : str
         Rotational DOF of the edge moments, ``"ry"`` for a patch along x.
+    layer_widths : tuple of float, optional
+        Widths of all layers of ``layers`` (m) when they differ (patch narrower than
+        the substrate); ``layer_widths[piezo_index]`` must equal ``width``.
     """
 
     name: str
@@ -313,6 +365,7 @@ class PiezoPatch:
     edges: tuple
     width: float
     component: str = "ry"
+    layer_widths: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "layers", _check_layers(self.layers, f"patch {self.name!r}"))
@@ -323,28 +376,66 @@ class PiezoPatch:
             )
         # validates index, material and width
         piezo_moment_per_volt(self.layers, self.piezo_index, self.width)
+        if self.layer_widths is not None:
+            object.__setattr__(self, "layer_widths", tuple(float(w) for w in self.layer_widths))
+            bw = _widths(self.layers, self.layer_widths, f"patch {self.name!r}")
+            if not np.isclose(bw[self.piezo_index], self.width, rtol=1e-12):
+                raise ParameterError(
+                    f"patch {self.name!r}: width {self.width} m differs from the piezo layer "
+                    f"width {bw[self.piezo_index]} m in layer_widths"
+                )
 
     @property
     def moment_per_volt(self) -> float:
         """Edge moment per volt of the whole patch width, N m/V (eq. 3 integrated)."""
-        return piezo_moment_per_volt(self.layers, self.piezo_index, self.width)
+        if self.layer_widths is None:
+            return piezo_moment_per_volt(self.layers, self.piezo_index, self.width)
+        return piezo_moment_per_volt(self.layers, self.piezo_index,
+                                     widths=self.layer_widths)
 
     @classmethod
-    def on_beam(cls, model: FEModel, patch_name: str, layers: Sequence[Ply],
-                piezo_index: int, width: float | None = None) -> PiezoPatch:
+    def on_beam(cls, model: FEModel, patch_name: str, layers: Sequence[Ply] | None = None,
+                piezo_index: int | None = None, width: float | None = None) -> PiezoPatch:
         """Patch on a :func:`~mvtk.fe.cantilever_beam` model using its patch node sets.
 
-        ``layers`` is the full stack at the patch; ``width`` defaults to
-        ``model.meta["width"]``.
+        Parameters
+        ----------
+        model : FEModel
+            Built by :func:`~mvtk.fe.cantilever_beam` with a patch ``patch_name``.
+        patch_name : str
+        layers : sequence of Ply, optional
+            Full stack at the patch, bottom to top. Default: the model's section stack
+            under the patch (``meta["section_layers"]``, with its layer widths).
+        piezo_index : int, optional
+            Driven layer; default the single PiezoMaterial layer of the stack.
+        width : float, optional
+            Piezo width (m) when ``layers`` is given; default ``model.meta["width"]``.
         """
-        w = model.meta.get("width") if width is None else width
-        if w is None:
-            raise ParameterError(f"patch {patch_name!r}: pass width= (m); the model has none")
         edges = (f"patch:{patch_name}:x0", f"patch:{patch_name}:x1")
         for e in edges:
             model.node_set(e)
-        return cls(name=patch_name, layers=tuple(layers), piezo_index=piezo_index,
-                   edges=edges, width=float(w))
+        widths = None
+        if layers is None:
+            layers, widths = _stack_under_patch(model, patch_name)
+        layers = _check_layers(layers, f"patch {patch_name!r}")
+        if piezo_index is None:
+            found = [i for i, p in enumerate(layers) if isinstance(p.material, PiezoMaterial)]
+            if len(found) != 1:
+                raise ParameterError(
+                    f"patch {patch_name!r}: expected exactly one PiezoMaterial layer in the "
+                    f"stack, found {len(found)} (indices {found}); pass piezo_index="
+                )
+            piezo_index = found[0]
+        if widths is not None:
+            w = widths[piezo_index]
+        else:
+            w = model.meta.get("width") if width is None else width
+            if w is None:
+                raise ParameterError(
+                    f"patch {patch_name!r}: pass width= (m); the model has none"
+                )
+        return cls(name=patch_name, layers=tuple(layers), piezo_index=int(piezo_index),
+                   edges=edges, width=float(w), layer_widths=widths)
 
     def load_vector(self, model: FEModel, voltage: float = 1.0) -> np.ndarray:
         """Free-DOF load vector of the patch at ``voltage`` (V); N m on rotations."""

@@ -449,3 +449,28 @@ def test_dense_mass_matrix_is_positive_definite_and_total_mass_right():
     u = np.zeros(model.n_dof)
     u[model.dof_component == 2] = 1.0
     assert u @ M @ u == pytest.approx(7900 * 0.2 * 0.02 * 1e-3, rel=1e-12)
+
+
+def test_layer_widths_section():
+    b, bp = 0.04, 0.01
+    lay = [Ply(STEEL, 1e-3), Ply(STEEL, 1e-3)]
+    same = beam_section(lay, b, layer_widths=[b, b])
+    ref = beam_section(lay, b)
+    for key, v in ref.as_dict().items():
+        assert getattr(same, key) == pytest.approx(v, rel=1e-12), key
+    s = beam_section(lay, b, layer_widths=[b, bp])
+    assert s.EA == pytest.approx(210e9 * 1e-3 * (b + bp))
+    zn = (b * 0.5e-3 + bp * 1.5e-3) / (b + bp)
+    assert s.neutral_axis == pytest.approx(zn)
+    ei = 210e9 * (b * (1e-9 / 12 + 1e-3 * (0.5e-3 - zn) ** 2)
+                  + bp * (1e-9 / 12 + 1e-3 * (1.5e-3 - zn) ** 2))
+    assert s.EIy == pytest.approx(ei)
+    assert s.EIz == pytest.approx(210e9 * 1e-3 * (b**3 + bp**3) / 12)
+    assert s.rhoA == pytest.approx(7900 * 1e-3 * (b + bp))
+    assert ref.GJ > s.GJ > beam_section(lay[:1], b).GJ
+    with pytest.raises(DimensionError, match="expected 2 layer widths"):
+        beam_section(lay, b, layer_widths=[b])
+    with pytest.raises(ParameterError, match="layer widths must be positive"):
+        beam_section(lay, b, layer_widths=[b, -1.0])
+    with pytest.raises(ParameterError, match="patch 'p': width must be a positive"):
+        BeamPatch("p", 0.0, 0.1, (Ply(STEEL, 1e-4),), width=0.0)

@@ -240,3 +240,62 @@ def test_edge_load_bad_input():
         edge_moment_load(no_ry, [0], [1], 1.0)
     with pytest.raises(ParameterError, match="no node set 'patch:nope:x0'"):
         PiezoPatch.on_beam(model, "nope", PAPER, 2)
+
+
+# ---------------------------------------------------------------- narrow patches
+def test_neutral_axis_and_moment_with_unequal_layer_widths():
+    widths = (0.04, 0.03, 0.03)  # steel 40 mm wide, epoxy and PZT 30 mm
+    E = np.array([210e9, 3.546e9, 66.667e9])
+    t = np.array([T_B, T_A, T_P])
+    zc = np.array([T_B / 2, T_B + T_A / 2, T_B + T_A + T_P / 2])
+    d = np.sum(E * np.array(widths) * t * zc) / np.sum(E * np.array(widths) * t)
+    assert neutral_axis(PAPER, widths) == pytest.approx(d, rel=1e-13)
+    m = piezo_moment_per_volt(PAPER, 2, widths=widths)
+    assert m == pytest.approx(66.667e9 * -210e-12 * 0.03 * (zc[2] - d), rel=1e-12)
+    # equal widths: the same as the width argument
+    assert piezo_moment_per_volt(PAPER, 2, widths=(0.03,) * 3) == pytest.approx(
+        piezo_moment_per_volt(PAPER, 2, width=0.03), rel=1e-14)
+    with pytest.raises(ParameterError, match="either width or widths"):
+        piezo_moment_per_volt(PAPER, 2, width=0.03, widths=widths)
+    with pytest.raises(DimensionError, match="expected 3 layer widths"):
+        neutral_axis(PAPER, (0.1, 0.1))
+    with pytest.raises(ParameterError, match="layer widths must be positive"):
+        neutral_axis(PAPER, (0.1, 0.0, 0.1))
+
+
+def test_narrow_full_length_patch_unimorph_through_beam_model():
+    L, b, bp, V = 0.2, 0.04, 0.025, 150.0
+    model = cantilever_beam(L, b, [Ply(STEEL, T_B)], 10,
+                            patches=[BeamPatch("pzt", 0.0, L, PAPER[1:], width=bp)])
+    patch = PiezoPatch.on_beam(model, "pzt")  # stack, index and widths from the model
+    assert patch.piezo_index == 2 and patch.width == bp
+    assert patch.layer_widths == (b, bp, bp)
+    widths = np.array([b, bp, bp])
+    d = neutral_axis(PAPER, widths)
+    z0 = np.array([0.0, T_B, T_B + T_A])
+    t = np.array([T_B, T_A, T_P])
+    E = np.array([210e9, 3.546e9, 66.667e9])
+    ei = np.sum(E * widths * (t**3 / 12 + t * (z0 + t / 2 - d) ** 2))
+    M = 66.667e9 * -210e-12 * bp * (T_B + T_A + T_P / 2 - d) * V
+    u = factorize(model.K).solve(patch.load_vector(model, V))
+    w, ry = _tip(model, u)
+    assert w == pytest.approx(-M * L**2 / (2 * ei), rel=1e-10)
+    assert ry == pytest.approx(M * L / ei, rel=1e-10)
+
+
+def test_on_beam_errors():
+    steel_patch = BeamPatch("s", 0.1, 0.15, (Ply(STEEL, 1e-4),))
+    pzt = BeamPatch("p", 0.02, 0.08, PAPER[1:])
+    over = BeamPatch("q", 0.05, 0.09, (Ply(STEEL, 1e-4),))
+    model = cantilever_beam(0.2, 0.02, [Ply(STEEL, T_B)], 10,
+                            patches=[steel_patch, pzt, over])
+    with pytest.raises(ParameterError, match="expected exactly one PiezoMaterial layer"):
+        PiezoPatch.on_beam(model, "s")
+    with pytest.raises(ParameterError, match="overlaps other patches"):
+        PiezoPatch.on_beam(model, "p")
+    # explicit layers bypass the look-up
+    ok = PiezoPatch.on_beam(model, "p", layers=PAPER)
+    assert ok.piezo_index == 2 and ok.width == 0.02
+    with pytest.raises(ParameterError, match="differs from the piezo layer width"):
+        PiezoPatch("p", PAPER, 2, ("patch:p:x0", "patch:p:x1"), 0.02,
+                   layer_widths=(0.02, 0.01, 0.01))
