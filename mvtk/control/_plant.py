@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import AccuracyWarning, DimensionError, ParameterError
 from ..fe import DOF_NAMES, FEModel, eigsh_lowest, factorize
 from ..reduction import SuperElement
-from ..reduction._craig_bampton import damping_matrix, reduced_modes
+from ..reduction._craig_bampton import damping_matrix, reduced_modes, solve_columns
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
 
@@ -336,7 +336,7 @@ def structural_plant(
         correct = n_kept < n_total and static_correction
         _check_restrained(w2, correct)
         if correct:
-            flex = factorize(model.K).solve(F)
+            flex = solve_columns(factorize(model.K), F)
     omega = np.sqrt(np.clip(w2, 0.0, None))
     Bm, Cm = phi.T @ B_r, C_r @ phi
     if modal_damping is not None:

@@ -285,3 +285,17 @@ def test_under_restrained_interior_is_reported():
     model = eb_beam_xz(n_el=10, clamped=False)
     with pytest.raises(ParameterError, match="K_ff .* is singular"):
         craig_bampton(model, retained_dofs=[0], n_modes=2)  # uz of node 0 only
+
+
+def test_solve_columns_matches_dense(beam, rng):
+    import scipy.sparse as sp
+
+    from mvtk.fe import factorize
+    from mvtk.reduction._craig_bampton import solve_columns
+
+    lu = factorize(beam.K)
+    B = rng.standard_normal((beam.n_dof, 3))
+    ref = np.linalg.solve(beam.K.toarray(), B)
+    np.testing.assert_allclose(solve_columns(lu, B), ref, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(solve_columns(lu, sp.csc_matrix(B)), ref, rtol=1e-7, atol=1e-12)
+    np.testing.assert_allclose(solve_columns(lu, B[:, 0]), ref[:, 0], rtol=1e-7, atol=1e-12)
