@@ -135,6 +135,9 @@ class Parameter:
         5e-4 m are equally conditioned. Default: ``abs(initial)`` (1 if it is zero).
     label : str, optional
         Name in tables (default: ``path``).
+    log : bool
+        Work on ``log(value / scale)`` instead (for positive quantities that may move
+        by orders of magnitude, e.g. a clamp spring stiffness).
     """
 
     path: str
@@ -144,6 +147,7 @@ class Parameter:
     fixed: bool = False
     scale: float | None = None
     label: str | None = None
+    log: bool = False
 
     def __post_init__(self) -> None:
         _split(self.path)
@@ -192,6 +196,11 @@ class Parameter:
         """
         current = get_path(description, self.path)
         x0 = current if self.initial is None else float(self.initial)
+        if self.log and (x0 <= 0 or self.upper <= 0):
+            raise ParameterError(
+                f"parameter {self.path!r}: log=True needs a positive value and upper bound, "
+                f"got initial {x0:g}, upper {self.upper:g}"
+            )
         if not self.fixed and not self.lower < x0 < self.upper:
             raise ParameterError(
                 f"parameter {self.path!r}: initial value {x0:g} must lie strictly inside "
@@ -205,7 +214,7 @@ class Parameter:
         """Build from a TOML table ``{path=..., lower=..., upper=..., ...}``."""
         if not isinstance(d, Mapping):
             raise ConfigError(f"{where}: expected a table with a 'path' key, got {d!r}")
-        allowed = {"path", "initial", "lower", "upper", "fixed", "scale", "label"}
+        allowed = {"path", "initial", "lower", "upper", "fixed", "scale", "label", "log"}
         unknown = set(d) - allowed
         if unknown:
             raise ConfigError(

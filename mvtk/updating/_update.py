@@ -88,8 +88,12 @@ class _State:
     d_omega2: np.ndarray | None = None  # (n_targets, n_free) per physical unit
 
 
+class _Matched(Exception):
+    """Raised inside least_squares when every frequency error is below freq_tol."""
+
+
 class _Problem:
-    """Residuals and Jacobian in scaled variables x = p / scale."""
+    """Residuals and Jacobian in scaled variables x = p / scale (or log(p / scale))."""
 
     def __init__(self, description, params, targets, builder, n_modes, weights, mac_weight,
                  regularization, mode_classifier, rel_step, difference):
@@ -104,11 +108,13 @@ class _Problem:
         self.classifier = mode_classifier
         self.rel_step = rel_step
         self.difference = difference
+        self.freq_tol = 0.0
         resolved = [p.resolve(description) for p in params]
         self.initial = np.array([v for v, _ in resolved])
         self.scale = np.array([s for _, s in resolved])
         self.free = np.array([not p.fixed for p in params], dtype=bool)
-        self.x0 = (self.initial / self.scale)[self.free]
+        self.log = np.array([p.log for p in params], dtype=bool)[self.free]
+        self.x0 = self.to_x(self.initial[self.free])
         self.ft = np.array([t.fn_hz for t in targets])
         self.mac_rows = (
             [i for i, t in enumerate(targets) if t.has_shape] if mac_weight > 0 else []
@@ -125,9 +131,22 @@ class _Problem:
         self._lowest: float | None = None
 
     # -------------------------------------------------------------- helpers
+    def to_x(self, p_free: np.ndarray) -> np.ndarray:
+        """Scaled variables of free parameter values (or bounds; log of <= 0 is -inf)."""
+        r = np.asarray(p_free, dtype=float) / self.scale[self.free]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lg = np.where(r > 0, np.log(np.where(r > 0, r, 1.0)), -np.inf)
+        return np.where(self.log, lg, r)
+
+    def dp_dx(self, x: np.ndarray) -> np.ndarray:
+        """Derivative of the free physical values with respect to x."""
+        return np.where(self.log, self.values(x)[self.free], self.scale[self.free])
+
     def values(self, x: np.ndarray) -> np.ndarray:
         v = self.initial.copy()
-        v[self.free] = np.asarray(x, dtype=float) * self.scale[self.free]
+        x = np.asarray(x, dtype=float)
+        sc = self.scale[self.free]
+        v[self.free] = np.where(self.log, sc * np.exp(np.where(self.log, x, 0.0)), sc * x)
         return v
 
     def describe(self, x: np.ndarray) -> dict:
@@ -225,7 +244,12 @@ class _Problem:
         ))
 
     def residual(self, x):
-        return self.state(x).residual
+        st = self.state(x)
+        if self.freq_tol > 0:
+            err = np.abs(st.residual[: len(self.targets)] / np.where(self.w > 0, self.w, 1.0))
+            if err.max() <= self.freq_tol:
+                raise _Matched
+        return st.residual
 
     # ------------------------------------------------------------- jacobian
     def jacobian(self, x) -> np.ndarray:
@@ -246,7 +270,7 @@ class _Problem:
         base_desc = self.describe(x)
         for k, j in enumerate(free_idx):
             p = self.params[j]
-            h = self.rel_step * self.scale[j]
+            h = self.rel_step * (abs(base_vals[j]) if p.log else self.scale[j])
             if base_vals[j] + h > p.upper:
                 h = -h
             steps = (h, -h) if self.difference == "central" else (h,)
@@ -276,7 +300,7 @@ class _Problem:
                         m = int(modes[i])
                     dmac[r, k] = (pm[i, m] - st.pairing.mac[i]) / h
         dfp = dw2 / (8 * math.pi**2 * fp[:, None])
-        scale = self.scale[free_idx][None, :]
+        scale = self.dp_dx(x)[None, :]
         rows = [(self.w / self.ft)[:, None] * dfp * scale]
         if self.mac_rows:
             rows.append(-self.mac_weight * self.w[self.mac_rows][:, None] * dmac * scale)
@@ -602,6 +626,7 @@ def update(
     identifiability_tol: float = 1e-3,
     rel_step: float = 1e-6,
     difference: str = "central",
+    freq_tol: float = 1e-7,
     xtol: float = 1e-10,
     ftol: float = 1e-12,
 ) -> UpdateResult:
@@ -662,6 +687,9 @@ def update(
         Scheme for dK/dp, dM/dp: central (two builds per free parameter per
         iteration, accurate for geometry) or forward (one build; exact for parameters
         entering the matrices linearly such as moduli, densities, springs).
+    freq_tol : float
+        Stop as soon as every relative frequency error is below this (only without
+        MAC and regularisation terms, whose optimum is not an exact match; 0 disables).
     xtol, ftol : float
         Stopping tolerances of least_squares.
 
@@ -705,15 +733,25 @@ def update(
     prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),
                     float(regularization), mode_classifier, rel_step, difference)
     free = prob.free
-    lb = np.array([p.lower for p in params])[free] / prob.scale[free]
-    ub = np.array([p.upper for p in params])[free] / prob.scale[free]
+    lb = prob.to_x(np.array([p.lower for p in params])[free])
+    ub = prob.to_x(np.array([p.upper for p in params])[free])
     st0 = prob.state(prob.x0)
     fn0, modes0, mac0 = st0.fn_all[st0.pairing.modes], st0.pairing.modes + 1, st0.pairing.mac
-    sol = least_squares(
-        prob.residual, prob.x0, jac=prob.jacobian, bounds=(lb, ub), method="trf",
-        x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12,
-    )
-    x = sol.x
+    if not (isinstance(freq_tol, int | float) and freq_tol >= 0):
+        raise ParameterError(f"freq_tol must be a number >= 0, got {freq_tol!r}")
+    if mac_weight == 0 and regularization == 0:
+        prob.freq_tol = float(freq_tol)
+    try:
+        sol = least_squares(
+            prob.residual, prob.x0, jac=prob.jacobian, bounds=(lb, ub), method="trf",
+            x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12,
+        )
+        x, status, message, nfev = sol.x, int(sol.status), str(sol.message), int(sol.nfev)
+    except _Matched:
+        x = prob._cache.x
+        status, nfev = 5, len(prob.history)
+        message = f"every relative frequency error is below freq_tol = {freq_tol:g}"
+    prob.freq_tol = 0.0
     st = prob.state(x)
     J = prob.jacobian(x)
     n_t, n_free = len(tg), int(free.sum())
@@ -759,7 +797,7 @@ def update(
         sig = np.full(n_data, np.nan)
     Ainv = np.linalg.pinv(A)
     cov_x = Ainv @ (Jd.T * sig) @ Jd @ Ainv
-    sc = prob.scale[free]
+    sc = prob.dp_dx(x)
     cov = cov_x * np.outer(sc, sc)
     std_free = np.sqrt(np.abs(np.diag(cov)))
     if weak.size and regularization == 0:
@@ -779,10 +817,10 @@ def update(
             f"parameters {hit} ended on a bound; the match may rely on the bound, not the "
             "data", AccuracyWarning, stacklevel=2,
         )
-    if sol.status == 0:
+    if status == 0:
         warnings.warn(
-            f"model updating stopped after {sol.nfev} evaluations (max_iter={max_iter}) "
-            f"without meeting the tolerances; cost {sol.cost:.3g}",
+            f"model updating stopped after {nfev} evaluations (max_iter={max_iter}) "
+            f"without meeting the tolerances; cost {0.5 * st.residual @ st.residual:.3g}",
             AccuracyWarning, stacklevel=2,
         )
     fp = st.fn_all[st.pairing.modes]
@@ -817,12 +855,12 @@ def update(
         null_directions=tuple(null_dirs),
         history=tuple(prob.history),
         swaps=tuple(prob.swaps),
-        success=bool(sol.status > 0),
-        message=str(sol.message),
-        n_evaluations=int(sol.nfev),
+        success=bool(status > 0),
+        message=message,
+        n_evaluations=nfev,
         n_jacobians=int(prob.timing["n_jacobians"]),
         cost=float(0.5 * st.residual @ st.residual),
         timing=dict(prob.timing),
         meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
-              "least_squares_status": int(sol.status)},
+              "least_squares_status": status},
     )

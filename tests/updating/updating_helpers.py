@@ -17,7 +17,7 @@ from mvtk.fe import FEModel
 
 NOMINAL = {
     "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
-    "structure": {"length": 0.18, "width": 0.05, "thickness": 5e-4, "n_elements": 20},
+    "structure": {"length": 0.18, "width": 0.05, "thickness": 5e-4, "n_elements": 12},
     "boundary": {"clamp_stiffness": 6.0},
     "tip_mass": 0.002,
     "patches": [{"x0": 0.01, "length": 0.05}],
@@ -43,18 +43,20 @@ def strip_model(d) -> FEModel:
     kt = GJ / le * np.array([[1, -1], [-1, 1]])
     mt = rIp * le / 6 * np.array([[2, 1], [1, 2]])
     nn = ne + 1
-    # global numbering over all nodes: per node (uz, rx, ry)
+    # global numbering over all nodes: per node (uz, rx, ry); vectorised assembly
     ndof = 3 * nn
-    K = np.zeros((ndof, ndof))
-    M = np.zeros((ndof, ndof))
-    for e in range(ne):
-        a, c = e, e + 1
-        bi = [3 * a, 3 * a + 2, 3 * c, 3 * c + 2]
-        ti = [3 * a + 1, 3 * c + 1]
-        K[np.ix_(bi, bi)] += kb
-        M[np.ix_(bi, bi)] += mb
-        K[np.ix_(ti, ti)] += kt
-        M[np.ix_(ti, ti)] += mt
+    e = np.arange(ne)[:, None]
+    bi = np.hstack([3 * e, 3 * e + 2, 3 * e + 3, 3 * e + 5])  # (ne, 4)
+    ti = np.hstack([3 * e + 1, 3 * e + 4])  # (ne, 2)
+
+    def assemble(kb_, kt_):
+        rows = np.concatenate([np.repeat(bi, 4, axis=1).ravel(), np.repeat(ti, 2, axis=1).ravel()])
+        cols = np.concatenate([np.tile(bi, 4).ravel(), np.tile(ti, 2).ravel()])
+        vals = np.concatenate([np.tile(kb_.ravel(), ne), np.tile(kt_.ravel(), ne)])
+        return sp.coo_matrix((vals, (rows, cols)), shape=(ndof, ndof)).toarray()
+
+    K = assemble(kb, kt)
+    M = assemble(mb, mt)
     M[3 * ne, 3 * ne] += d.get("tip_mass", 0.0)
     kr = d.get("boundary", {}).get("clamp_stiffness")
     fixed = [0, 1]  # uz and rx of the root
