@@ -472,11 +472,14 @@ class BeamPatch:
             raise ParameterError(
                 f"patch {self.name!r}: side must be 'top' or 'bottom', got {self.side!r}"
             )
-        if self.width is not None and not (np.isfinite(self.width) and self.width > 0):
+        if self.width is not None and not (
+            np.isfinite(_as_float(self.width)) and _as_float(self.width) > 0
+        ):
             raise ParameterError(
                 f"patch {self.name!r}: width must be a positive length in m, got {self.width!r}"
             )
-        if not (np.isfinite(self.x0) and np.isfinite(self.x1) and self.x0 < self.x1):
+        x0, x1 = _as_float(self.x0), _as_float(self.x1)
+        if not (np.isfinite(x0) and np.isfinite(x1) and x0 < x1):
             raise ParameterError(
                 f"patch {self.name!r}: expected x0 < x1 (m), got x0={self.x0!r}, x1={self.x1!r}"
             )
@@ -510,6 +513,14 @@ def _mesh_x(length: float, n_elements: int, breaks: np.ndarray) -> np.ndarray:
     return np.concatenate(xs)
 
 
+def _as_float(value) -> float:
+    """float(value), or nan when it is not a number (so range checks fail cleanly)."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        return float("nan")
+
+
 def _clamp_springs(clamp_stiffness, clamp_translational_stiffness) -> dict[int, float] | None:
     if clamp_stiffness is None and clamp_translational_stiffness is None:
         return None
@@ -526,10 +537,7 @@ def _clamp_springs(clamp_stiffness, clamp_translational_stiffness) -> dict[int, 
     if clamp_translational_stiffness is not None:
         out[DOF_NAMES.index("uz")] = clamp_translational_stiffness
     for c, v in out.items():
-        try:
-            v = float(v)
-        except (TypeError, ValueError):
-            v = float("nan")
+        v = _as_float(v)
         if not (np.isfinite(v) and v > 0):
             raise ParameterError(
                 f"clamp stiffness of {DOF_NAMES[c]!r} must be a positive stiffness "
@@ -541,7 +549,10 @@ def _clamp_springs(clamp_stiffness, clamp_translational_stiffness) -> dict[int, 
 
 def _point_x(key: str, value) -> float:
     """x of a named point given as x or (x, y[, z]) (y, z ignored for a beam)."""
-    v = np.atleast_1d(np.asarray(value, dtype=float))
+    try:
+        v = np.atleast_1d(np.asarray(value, dtype=float))
+    except (TypeError, ValueError):
+        v = np.zeros((0, 0))
     if v.ndim != 1 or not 1 <= v.size <= 3:
         raise ParameterError(
             f"point {key!r}: expected x or (x, y[, z]) in m, got {value!r}"
@@ -570,7 +581,7 @@ def cantilever_beam(
     length : float
         Beam length, m.
     width : float
-        Width of the base stack and of every patch, m.
+        Width of the base stack (and of patches that do not give their own), m.
     layers : sequence of Ply
         Base stack, bottom to top.
     n_elements : int
@@ -621,17 +632,25 @@ def cantilever_beam(
     ParameterError
         For non-positive sizes, a patch or point outside the beam, duplicate names, or
         an unknown clamp.
+
+    Notes
+    -----
+    A clamped beam has a non-singular K: for large models solve the eigenproblem with
+    ``mvtk.fe.eigsh_lowest(model.K, model.M, n, sigma=0.0)``. (The default negative
+    shift of ``eigsh_lowest`` grows like 1/h^2 with the element size h and makes fine
+    beam meshes slow to converge.)
     """
-    L = float(length)
+    L = _as_float(length)
     if not (np.isfinite(L) and L > 0):
         raise ParameterError(
             f"cantilever_beam: length must be a positive length in m, got {length!r}"
         )
-    if not (np.isfinite(float(width)) and float(width) > 0):
+    if not (np.isfinite(_as_float(width)) and _as_float(width) > 0):
         raise ParameterError(
             f"cantilever_beam: width must be a positive length in m, got {width!r}"
         )
-    if int(n_elements) != n_elements or n_elements < 1:
+    if (isinstance(n_elements, bool) or not np.isfinite(_as_float(n_elements))
+            or int(n_elements) != n_elements or n_elements < 1):
         raise ParameterError(
             f"cantilever_beam: n_elements must be an integer >= 1, got {n_elements!r}"
         )

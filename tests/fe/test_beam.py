@@ -388,6 +388,9 @@ def test_bottom_patch_equals_top_patch_of_a_symmetric_layer():
     [
         ({"length": -1.0}, "length must be a positive"),
         ({"width": 0.0}, "width must be a positive"),
+        ({"length": "long"}, "length must be a positive"),
+        ({"n_elements": "ten"}, "n_elements must be an integer"),
+        ({"n_elements": True}, "n_elements must be an integer"),
         ({"n_elements": 0}, "n_elements must be an integer"),
         ({"n_elements": 2.5}, "n_elements must be an integer"),
         ({"clamp": "middle"}, "clamp must be"),
@@ -419,6 +422,10 @@ def test_cantilever_beam_bad_input(kwargs, match):
 def test_bad_patch_and_section_input():
     with pytest.raises(ParameterError, match="expected x0 < x1"):
         BeamPatch("p", 0.2, 0.1, (Ply(PZT, 1e-4),))
+    with pytest.raises(ParameterError, match="expected x0 < x1"):
+        BeamPatch("p", "start", 0.1, (Ply(PZT, 1e-4),))
+    with pytest.raises(ParameterError, match="expected x or"):
+        cantilever_beam(0.2, 0.02, [Ply(STEEL, 1e-3)], 4, points={"s": "middle"})
     with pytest.raises(ParameterError, match="side must be 'top' or 'bottom'"):
         BeamPatch("p", 0.0, 0.1, (Ply(PZT, 1e-4),), side="left")
     with pytest.raises(ParameterError, match="width must be a positive"):
