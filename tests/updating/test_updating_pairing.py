@@ -5,6 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from updating_helpers import NOMINAL, model_fn
 
 from mvtk.errors import DimensionError, ParameterError
@@ -117,3 +120,19 @@ def test_strip_test_builder_matches_closed_forms():
     G = E / (2 * (1 + nu))
     ft = np.sqrt(G * b * t**3 / 3 / (rho * (b * t**3 + t * b**3) / 12)) / (4 * L)
     assert f[2] == pytest.approx(ft, rel=2e-3)  # linear torsion elements, 12 of them
+
+_finite = st.floats(-1e3, 1e3, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=60, deadline=None)
+@given(a=arrays(float, (6, 2), elements=_finite), b=arrays(float, (6, 3), elements=_finite),
+       k=st.floats(-1e3, 1e3).filter(lambda v: abs(v) > 1e-3))
+def test_mac_properties(a, b, k):
+    m = mac(a, b)
+    assert m.shape == (2, 3)
+    assert np.all((m >= 0) & (m <= 1))
+    np.testing.assert_allclose(m, mac(b, a).T, atol=1e-12)
+    # invariant to scaling (and sign) of either shape
+    np.testing.assert_allclose(mac(k * a, b), m, atol=1e-9)
+    nz = np.einsum("ij,ij->j", a, a) > 1e-12
+    np.testing.assert_allclose(np.diag(mac(a, a))[nz], 1.0, atol=1e-9)
