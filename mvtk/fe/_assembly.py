@@ -16,6 +16,34 @@ from ._shell import DRILL_FACTOR, mitc4_matrices
 __all__ = ["assemble_shell_model", "assemble_element_matrices"]
 
 
+class _Pattern:
+    """Sparsity pattern shared by several element matrices on the same DOF map.
+
+    One sort of the (row, col) keys serves K and M; each matrix is then summed with
+    ``np.bincount`` (no per-matrix COO -> CSR conversion).
+    """
+
+    def __init__(self, dofs: np.ndarray, free_index: np.ndarray, n_free: int):
+        f = free_index[dofs]
+        n = dofs.shape[1]
+        rows = np.broadcast_to(f[:, :, None], (len(f), n, n)).ravel()
+        cols = np.broadcast_to(f[:, None, :], (len(f), n, n)).ravel()
+        self.keep = np.flatnonzero((rows >= 0) & (cols >= 0))
+        key = rows[self.keep] * np.int64(n_free) + cols[self.keep]
+        uniq, self.inverse = np.unique(key, return_inverse=True)
+        self.indices = (uniq % n_free).astype(np.int32 if n_free < 2**31 else np.int64)
+        row_of = uniq // n_free
+        self.indptr = np.searchsorted(row_of, np.arange(n_free + 1)).astype(self.indices.dtype)
+        self.n_free = n_free
+        self.n_unique = len(uniq)
+
+    def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:
+        data = np.bincount(self.inverse, weights=Ke.reshape(-1)[self.keep],
+                           minlength=self.n_unique)
+        return sp.csr_matrix((data, self.indices, self.indptr),
+                             shape=(self.n_free, self.n_free))
+
+
 def assemble_element_matrices(
     Ke: np.ndarray, dofs: np.ndarray, free_index: np.ndarray, n_free: int
 ) -> sp.csr_matrix:
@@ -30,15 +58,18 @@ def assemble_element_matrices(
         Free DOF number of every global DOF, -1 for constrained ones.
     n_free : int
     """
-    f = free_index[dofs]
-    rows = np.broadcast_to(f[:, :, None], Ke.shape).ravel()
-    cols = np.broadcast_to(f[:, None, :], Ke.shape).ravel()
-    data = Ke.ravel()
-    keep = (rows >= 0) & (cols >= 0)
-    A = sp.coo_matrix((data[keep], (rows[keep], cols[keep])), shape=(n_free, n_free))
-    A = A.tocsr()
-    A.sum_duplicates()
-    return A
+    return _Pattern(dofs, free_index, n_free).assemble(Ke)
+
+
+def _unique_elements(xy: np.ndarray, section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of geometrically distinct elements (shape relative to node 0 + section)
+    and, for every element, the index of its representative."""
+    rel = xy - xy[:, :1, :]
+    scale = max(float(np.abs(rel).max()), 1e-300)
+    key = np.column_stack([np.round(rel.reshape(len(xy), -1) / (1e-10 * scale)),
+                           section[:, None]]).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
 
 
 def assemble_shell_model(
@@ -102,10 +133,16 @@ def assemble_shell_model(
     if np.ptp(z) > 1e-12 * max(1.0, float(np.ptp(nodes[:, :2]))):
         raise ParameterError("MITC4 shells here are flat: all element nodes need one z")
 
-    abd = np.stack([s.ABD for s in sections])[element_section]
-    hs = np.stack([s.H for s in sections])[element_section]
-    inertia = np.array([[s.I0, s.I1, s.I2] for s in sections])[element_section]
-    Ke, Me = mitc4_matrices(nodes[elements, :2], abd, hs, inertia, drill_factor)
+    # element matrices depend only on the element shape and section: compute each
+    # distinct one once (structured meshes have a handful)
+    xy = nodes[elements, :2]
+    first, rep = _unique_elements(xy, element_section)
+    sec = element_section[first]
+    abd = np.stack([s.ABD for s in sections])[sec]
+    hs = np.stack([s.H for s in sections])[sec]
+    inertia = np.array([[s.I0, s.I1, s.I2] for s in sections])[sec]
+    Ku, Mu = mitc4_matrices(xy[first], abd, hs, inertia, drill_factor)
+    Ke, Me = Ku[rep], Mu[rep]
 
     n_all = n_nodes * 6
     fixed = np.zeros(n_all, dtype=bool)
@@ -121,8 +158,9 @@ def assemble_shell_model(
     free_index = np.full(n_all, -1, dtype=np.int64)
     free_index[free] = np.arange(len(free))
     dofs = (elements[:, :, None] * 6 + np.arange(6)[None, None, :]).reshape(len(elements), 24)
-    K = assemble_element_matrices(Ke, dofs, free_index, len(free))
-    M = assemble_element_matrices(Me, dofs, free_index, len(free))
+    pattern = _Pattern(dofs, free_index, len(free))
+    K = pattern.assemble(Ke)
+    M = pattern.assemble(Me)
     if springs is not None:
         k = np.asarray(springs, dtype=float)
         if k.shape != (n_all,):
