@@ -635,6 +635,12 @@ def cantilever_beam(
 
     Notes
     -----
+    Beam theory uses the uniaxial modulus and Saint-Venant torsion: for wide strips
+    (width comparable to length) a plate model is stiffer (plate modulus, warping
+    restraint at the clamp). For the nominal smart beam of ``data/structures`` (180 x
+    133 mm) the beam gives 13.95 / 35.4 Hz (bending / torsion) where the MITC4 plate
+    gives 14.25 / 42.2 Hz; for a 200 x 20 mm strip with nu = 0 they agree to 1e-4.
+
     A clamped beam has a non-singular K: for large models solve the eigenproblem with
     ``mvtk.fe.eigsh_lowest(model.K, model.M, n, sigma=0.0)``. (The default negative
     shift of ``eigsh_lowest`` grows like 1/h^2 with the element size h and makes fine
