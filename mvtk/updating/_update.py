@@ -611,7 +611,7 @@ def _check_inputs(parameters, targets, weights, regularization, mac_weight, max_
 
 
 def update(
-    description: Mapping[str, Any],
+    description: Mapping[str, Any] | str | Path,
     parameters: Sequence[Parameter | str],
     targets: Sequence[FrequencyTarget | float],
     *,
@@ -652,8 +652,9 @@ def update(
 
     Parameters
     ----------
-    description : mapping
-        Structure description (nested dicts/lists, e.g. a parsed structure TOML).
+    description : mapping or path
+        Structure description (nested dicts/lists, e.g. a parsed structure TOML), or
+        the path of a structure TOML file.
     parameters : sequence of Parameter or str
         Fields to update (a str is ``Parameter(path)`` without bounds).
     targets : sequence of FrequencyTarget or float
@@ -715,6 +716,13 @@ def update(
     """
     from scipy.optimize import least_squares
 
+    if isinstance(description, str | Path):
+        import tomllib
+
+        try:
+            description = tomllib.loads(Path(description).read_text(encoding="utf-8"))
+        except (OSError, tomllib.TOMLDecodeError) as err:
+            raise ConfigError(f"cannot read structure TOML {description}: {err}") from err
     if not isinstance(description, Mapping):
         raise ParameterError(
             f"description must be a mapping (parsed structure TOML), got "

@@ -257,6 +257,9 @@ def test_result_tables_toml_and_json(tmp_path):
         r.to_dataframe("foo")
     out = r.write_toml(tmp_path / "updated.toml")
     back = tomllib.loads(out.read_text())
+    # the written file is a valid starting point (description given as a path)
+    again = _quiet_update(out, [Parameter(E, lower=1e11, upper=4e11)], f.tolist())
+    assert again.n_evaluations == 1 and again.values[0] == pytest.approx(r.values[0])
     assert back["materials"]["steel"]["E"] == pytest.approx(2.1e11, rel=1e-6)
     assert back["patches"] == NOMINAL["patches"]
     d = json.loads(json.dumps(r.to_dict()))
@@ -286,6 +289,8 @@ def test_update_bad_inputs():
             update(NOMINAL, *args, **kw, **extra)
     with pytest.raises(ParameterError, match="description must be a mapping"):
         update([1], [E], f, **kw)
+    with pytest.raises(ConfigError, match="cannot read structure TOML .*absent.toml"):
+        update("absent.toml", [E], f, **kw)
     with pytest.raises(ParameterError, match="must return an mvtk.fe.FEModel, got dict"):
         update(NOMINAL, [E], f, builder=lambda d: d)
 
