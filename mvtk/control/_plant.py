@@ -119,7 +119,12 @@ def _vector(model: FEModel, v, what: str, key) -> np.ndarray:
 def _parse_inputs(model: FEModel, inputs, units):
     vectors, names, unit_list = [], [], []
     for i, (name, spec) in enumerate(_named(inputs, "inputs")):
-        if _is_dof_spec(spec):
+        if hasattr(spec, "load_vector"):
+            # an actuator such as mvtk.fe._piezo.PiezoPatch: load per volt
+            vectors.append(_vector(model, spec.load_vector(model), "input", name or i))
+            names.append(name or str(getattr(spec, "name", f"u{i}")))
+            unit_list.append("V")
+        elif _is_dof_spec(spec):
             if len(spec) != 2:
                 raise ParameterError(
                     f"input {spec!r}: a DOF input is (node, component), got {len(spec)} items"
@@ -222,9 +227,10 @@ def structural_plant(
         The structure. A full FE model is accepted for reference comparisons (physical
         form up to :data:`MAX_DENSE_DOF` DOFs; modal form needs ``n_modes``).
     inputs : mapping name -> spec, or sequence of specs
-        Each spec is ``(node, component)`` (unit force in N or moment in N m at that DOF)
-        or a load vector of shape ``(n_dof,)`` over the free DOFs of the full model (e.g.
-        the piezo patch load per volt, N m per V).
+        Each spec is ``(node, component)`` (unit force in N or moment in N m at that DOF),
+        a load vector of shape ``(n_dof,)`` over the free DOFs of the full model, or an
+        actuator object with ``load_vector(model)`` giving the load per volt, such as
+        :class:`mvtk.fe._piezo.PiezoPatch` (input in V, named after the patch).
     outputs : mapping name -> spec, or sequence of specs
         Each spec is ``(node, component)`` or ``(node, component, quantity)`` with
         quantity ``"displacement"`` (default; m or rad) or ``"velocity"`` (m/s, rad/s),
@@ -245,8 +251,8 @@ def structural_plant(
         Modal form with truncation: add the residual static flexibility of the dropped
         modes as a feedthrough ``D`` on displacement outputs, so the DC gain is exact.
     input_units, output_units : sequence of str, optional
-        Override the unit strings (defaults: N / N m for DOF inputs, m / rad / m/s /
-        rad/s for DOF outputs, empty for vectors).
+        Override the unit strings (defaults: N / N m for DOF inputs, V for actuators,
+        m / rad / m/s / rad/s for DOF outputs, empty for vectors).
 
     Returns
     -------

@@ -253,3 +253,28 @@ def test_se_with_free_free_base_is_restrained_by_boundary():
     p = structural_plant(se, [(10, "uz")], [(10, "uz")])
     w2 = sla.eigh(p.K, p.M, eigvals_only=True)
     assert abs(w2[0]) < 1e-6 * w2[2] and abs(w2[1]) < 1e-6 * w2[2]
+
+
+def test_piezo_patch_input_in_volts():
+    """Volts in through the FE layer's piezo relation (paper eqs. 1-7, pin-force edges)."""
+    piezo = pytest.importorskip("mvtk.fe._piezo")
+    from mvtk.fe import PiezoMaterial
+
+    pic151 = PiezoMaterial("pic151", E=66.667e9, nu=0.34, rho=7800.0, d31=-210e-12)
+    epoxy = IsotropicMaterial("epoxy", E=3.546e9, nu=0.35, rho=1180.0)
+    model = cantilever_beam(
+        0.18, 0.03, [Ply(STEEL, 0.5e-3)], 36,
+        patches=[{"name": "pzt", "x0": 0.005, "x1": 0.055,
+                  "layers": (Ply(epoxy, 36e-6), Ply(pic151, 0.25e-3))}],
+    )
+    patch = piezo.PiezoPatch.on_beam(model, "pzt")
+    se = craig_bampton(model, ["patch:pzt:x0", "patch:pzt:x1", "tip"], 8)
+    tip = int(model.node_set("tip")[0])
+    p = structural_plant(se, [patch], {"w_tip": (tip, "uz")}, alpha=ALPHA, beta=BETA,
+                         form="modal", n_modes=4)
+    ss = p.to_state_space()
+    assert ss.inputs == ("pzt",) and ss.input_units == ("V",)
+    x = np.linalg.solve(model.K.toarray(), patch.load_vector(model))
+    w_tip = x[model.dof_index(tip, "uz")]
+    np.testing.assert_allclose(ss.dc_gain()[0, 0], w_tip, rtol=1e-8)
+    assert w_tip > 0  # d31 < 0, patch on top: positive volts bend the tip up (+z)
