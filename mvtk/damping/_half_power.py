@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..errors import ModeOverlapWarning, ParameterError, ResolutionWarning
+from ..errors import AccuracyWarning, ModeOverlapWarning, ParameterError, ResolutionWarning
 from ..signal._curves import amplitude_curves
 from ..signal._frf import exponential_window_correction
 from ..signal._peaks import find_peaks
@@ -42,9 +42,13 @@ class HalfPowerResult:
         Record length that gives ``min_lines`` lines across the band
         (``min_lines / (f2 - f1)``, rectangular window). A lower bound when the band
         itself was overestimated by a short record.
+    scatter : numpy.ndarray
+        RMS relative scatter of ``|H|`` about the single-mode curve fitted to the lines
+        above ``fit_level`` x peak (NaN with fewer than 6 such lines): a noise measure.
     quality : tuple of str
         ``"ok"``, ``"coarse"`` (fewer than ``min_lines`` lines), ``"overlap"`` (a
-        neighbouring mode within ``overlap_factor`` bandwidths) or ``"failed"``.
+        neighbouring mode within ``overlap_factor`` bandwidths), ``"noisy"`` (scatter
+        above ``max_scatter``) or ``"failed"``.
     kind : tuple of str
         Exact single-mode relation used: receptance, mobility or accelerance.
     df_hz : float
@@ -61,6 +65,7 @@ class HalfPowerResult:
     peak_amplitude: np.ndarray
     n_lines: np.ndarray
     record_needed_s: np.ndarray
+    scatter: np.ndarray
     quality: tuple[str, ...]
     kind: tuple[str, ...]
     df_hz: float
@@ -72,6 +77,7 @@ class HalfPowerResult:
             "zeta": self.zeta, "f1_hz": self.f1_hz, "f2_hz": self.f2_hz,
             "peak_hz": self.peak_hz, "peak_amplitude": self.peak_amplitude,
             "n_lines": self.n_lines, "record_needed_s": self.record_needed_s,
+            "scatter": self.scatter,
             "quality": list(self.quality), "kind": list(self.kind),
         })
 
@@ -173,22 +179,27 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
     u = (2 * np.pi * f) ** 2
     with np.errstate(divide="ignore", invalid="ignore"):
         y = u**p / a**2  # = P(u) for a single mode
-    if method == "fit":
-        jl, jr = k, k
-        while jl > 0 and fit_level * a[k] <= a[jl - 1] <= a[k]:
-            jl -= 1
-        while jr < n - 1 and fit_level * a[k] <= a[jr + 1] <= a[k]:
-            jr += 1
-        sl = slice(jl, jr + 1)
-        if jr - jl + 1 < 3:
-            sl = slice(k - 1, k + 2)
-        idx = np.arange(n)[sl]
+    jl, jr = k, k
+    while jl > 0 and fit_level * a[k] <= a[jl - 1] <= a[k]:
+        jl -= 1
+    while jr < n - 1 and fit_level * a[k] <= a[jr + 1] <= a[k]:
+        jr += 1
+    idx = np.arange(jl, jr + 1) if jr - jl + 1 >= 3 else np.arange(k - 1, k + 2)
+    scatter = np.nan
+    cfit = None
+    if idx.size >= 3:
         w = 1.0 / y[idx]
         us, ss = u[idx].mean(), u[idx].std() or 1.0
         x = (u[idx] - us) / ss
         c2, c1, c0 = _wfit(x, y[idx], w)
-        cpk = (c0 - c1 * us / ss + c2 * us**2 / ss**2, c1 / ss - 2 * c2 * us / ss**2,
-               c2 / ss**2)
+        cfit = (c0 - c1 * us / ss + c2 * us**2 / ss**2, c1 / ss - 2 * c2 * us / ss**2,
+                c2 / ss**2)
+        if idx.size >= 6:
+            # relative amplitude scatter about the single-mode curve (1/|H|^2 -> / 2)
+            rel = (c2 * x**2 + c1 * x + c0) / y[idx] - 1.0
+            scatter = float(np.sqrt(np.sum(rel**2) / (idx.size - 3)) / 2)
+    if method == "fit":
+        cpk = cfit
     else:
         cpk = _quad(u[k - 1:k + 2], y[k - 1:k + 2])
     m = _min_of(cpk, p)
@@ -200,7 +211,7 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
             gpk, upk = y[k] / u[k] ** p, u[k]
     peak = 1 / np.sqrt(gpk)
     level = peak / np.sqrt(2)
-    out = {"k": k, "peak": peak, "upk": upk}
+    out = {"k": k, "peak": peak, "upk": upk, "scatter": scatter}
     if method == "fit":
         left = _crossing(cpk, p, 2 * gpk, 0.0, upk)
         right = _crossing(cpk, p, 2 * gpk, upk, np.inf)
@@ -255,6 +266,7 @@ def half_power(
     fit_level: float = 0.5,
     min_lines: float = 5.0,
     overlap_factor: float = 5.0,
+    max_scatter: float = 0.03,
     exponential_tau_s="auto",
 ) -> HalfPowerResult:
     """Half-power (-3 dB) bandwidth damping of each mode on each curve.
@@ -294,6 +306,9 @@ def half_power(
         A neighbouring peak closer than ``overlap_factor`` x (f2 - f1) gives quality
         ``"overlap"`` and a :class:`~mvtk.errors.ModeOverlapWarning` (the neighbour
         biases the bandwidth, usually upwards).
+    max_scatter : float
+        Relative scatter of ``|H|`` about the fitted single-mode curve above which the
+        quality is ``"noisy"`` and an :class:`~mvtk.errors.AccuracyWarning` is issued.
     exponential_tau_s : float, "auto" or None
         Exponential-window time constant to remove (see
         :func:`mvtk.signal.exponential_window_correction`); ``"auto"`` reads
@@ -340,7 +355,7 @@ def half_power(
     tau = curves.attrs.get("exponential_window_tau_s") if exponential_tau_s == "auto" \
         else exponential_tau_s
     rows = {k: [] for k in ("curve", "mode", "fn", "zeta", "f1", "f2", "pk", "amp", "nl",
-                            "need", "quality", "kind")}
+                            "need", "scatter", "quality", "kind")}
     for label, a, ck in zip(curves.labels, curves.amplitude, curves.kinds):
         p = _POWER[ck]
         for m, ft in enumerate(targets):
@@ -361,6 +376,8 @@ def half_power(
                     quality = "overlap"
                 elif nl < min_lines * (1 - 1e-6):
                     quality = "coarse"
+                elif res["scatter"] > max_scatter:
+                    quality = "noisy"
             else:
                 fn = z = nl = band = np.nan
             pk_hz = np.sqrt(res["upk"]) / (2 * np.pi) if res else np.nan
@@ -374,19 +391,21 @@ def half_power(
             rows["amp"].append(res["peak"] if res else np.nan)
             rows["nl"].append(nl)
             rows["need"].append(min_lines / band if band > 0 else np.nan)
+            rows["scatter"].append(res["scatter"] if res else np.nan)
             rows["quality"].append(quality)
             rows["kind"].append(ck)
     result = HalfPowerResult(
         tuple(rows["curve"]), np.asarray(rows["mode"]), np.asarray(rows["fn"]),
         np.asarray(rows["zeta"]), np.asarray(rows["f1"]), np.asarray(rows["f2"]),
         np.asarray(rows["pk"]), np.asarray(rows["amp"]), np.asarray(rows["nl"]),
-        np.asarray(rows["need"]), tuple(rows["quality"]), tuple(rows["kind"]), df,
+        np.asarray(rows["need"]), np.asarray(rows["scatter"]), tuple(rows["quality"]),
+        tuple(rows["kind"]), df,
     )
-    _warn(result, min_lines, df)
+    _warn(result, min_lines, df, max_scatter)
     return result
 
 
-def _warn(r: HalfPowerResult, min_lines: float, df: float) -> None:
+def _warn(r: HalfPowerResult, min_lines: float, df: float, max_scatter: float) -> None:
     coarse = [i for i, q in enumerate(r.quality) if q == "coarse"]
     if coarse:
         parts = [
@@ -397,9 +416,20 @@ def _warn(r: HalfPowerResult, min_lines: float, df: float) -> None:
         warnings.warn(
             f"half_power: fewer than {min_lines:g} frequency lines (df = {df:.4g} Hz, record "
             f"{1 / df:.4g} s) across the half-power band of {len(coarse)} mode(s); the damping "
-            f"is likely overestimated: " + "; ".join(parts)
+            f"is unreliable (overestimated by leakage on short transient records): " + "; ".join(parts)
             + ". Use a longer record or envelope_fit/log_decrement on the free decay.",
             ResolutionWarning, stacklevel=3,
+        )
+    noisy = [i for i, q in enumerate(r.quality) if q == "noisy"]
+    if noisy:
+        parts = [f"{r.curve[i]} mode {r.mode[i]} at {r.fn_hz[i]:.4g} Hz: {r.scatter[i]:.1%}"
+                 for i in noisy[:6]]
+        warnings.warn(
+            f"half_power: |H| scatters by more than {max_scatter:.0%} about a single-mode "
+            "curve near the peak of " + "; ".join(parts) + "; the -3 dB points of a noisy "
+            "curve are biased (a noise spike at the peak narrows the band). Use "
+            "method='fit', more averages, or a time-domain estimator.",
+            AccuracyWarning, stacklevel=3,
         )
     overlap = [i for i, q in enumerate(r.quality) if q == "overlap"]
     if overlap:

@@ -45,7 +45,8 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
     Parameters
     ----------
     spectrum : xarray.Dataset, xarray.DataArray or array_like
-        * Dataset with an ``"frf"`` variable (from :func:`mvtk.signal.frf`);
+        * Dataset with an ``"frf"`` variable (from :func:`mvtk.signal.frf` or
+          ``mvtk.io.read``), else a ``"psd"`` or ``"auto_spectrum"`` variable (power);
         * DataArray FRF, dims ``("response", "reference", "frequency")``;
         * DataArray spectrum, dims ``("channel", "frequency")`` (``attrs["spectrum"] ==
           "psd"`` marks a power spectrum);
@@ -64,12 +65,17 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
         )
     attrs: dict = {}
     if isinstance(spectrum, xr.Dataset):
-        if "frf" not in spectrum.data_vars:
+        name = next((v for v in ("frf", "psd", "auto_spectrum") if v in spectrum.data_vars),
+                    None)
+        if name is None:
             raise FormatError(
-                f"expected a Dataset with an 'frf' variable, found {sorted(map(str, spectrum))}"
+                "expected a Dataset with an 'frf', 'psd' or 'auto_spectrum' variable, found "
+                f"{sorted(map(str, spectrum.data_vars))}"
             )
         attrs = dict(spectrum.attrs)
-        spectrum = spectrum["frf"]
+        spectrum = spectrum[name]
+        if name != "frf" and power is None:
+            power = True  # PSD / auto spectrum from mvtk.io.read: a power quantity
     if isinstance(spectrum, xr.DataArray):
         attrs = {**attrs, **spectrum.attrs}
         if "frequency" not in spectrum.dims:

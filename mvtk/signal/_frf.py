@@ -67,15 +67,25 @@ def exponential_window_correction(fn_hz, zeta, tau_s: float):
     return wn / (2 * np.pi), sigma / wn
 
 
-def _find_hits(force: np.ndarray, level: float, min_gap: int) -> np.ndarray:
-    above = np.abs(force) >= level
-    rising = np.flatnonzero(above[1:] & ~above[:-1]) + 1
-    if above[0]:
-        rising = np.r_[0, rising]
-    hits = []
-    for i in rising:
-        if not hits or i - hits[-1] >= min_gap:
-            hits.append(i)
+def _find_hits(force: np.ndarray, level: float, quiet: int, dead: int) -> np.ndarray:
+    """Start samples of hits: runs of ``polarity * force >= level``.
+
+    Runs closer than ``quiet`` samples (anti-alias filter ringing of one pulse) or
+    within ``dead`` samples of the hit start (the force window) belong to one hit.
+    """
+    polarity = 1.0 if force[np.argmax(np.abs(force))] >= 0 else -1.0
+    above = polarity * force >= level
+    edges = np.diff(np.r_[0, above.astype(np.int8), 0])
+    starts = np.flatnonzero(edges == 1)
+    ends = np.flatnonzero(edges == -1)  # one past the last sample above
+    hits: list[int] = []
+    last_end = -(10**18)
+    for s0, e0 in zip(starts, ends):
+        if hits and (s0 - last_end < quiet or s0 - hits[-1] < dead):
+            last_end = e0
+            continue
+        hits.append(int(s0))
+        last_end = e0
     return np.asarray(hits, dtype=int)
 
 
@@ -83,8 +93,8 @@ def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_
     level = trigger_level * np.max(np.abs(force))
     if not level > 0:
         raise FormatError("reference: the force channel is all zeros; no hit to trigger on")
-    dead = max(force_window_n or 0, int(0.002 * fs), 1)
-    hits = _find_hits(force, level, dead)
+    quiet = max(4, int(round(0.005 * fs)))
+    hits = _find_hits(force, level, quiet, force_window_n or 0)
     n = force.size
     if nperseg is None:
         gaps = np.diff(np.r_[hits, n])
@@ -155,7 +165,9 @@ def frf(
     excitation : {"random", "impact"}
         ``"random"``: Welch averaging over overlapping segments (default Hann window).
         ``"impact"``: one record of ``nperseg`` samples per hit, found by a trigger on
-        the first reference channel at ``trigger_level`` x its peak, starting
+        the first reference channel at ``trigger_level`` x its peak (in the polarity of
+        the largest sample; crossings less than max(4 samples, 5 ms) after the force
+        fell below the level, e.g. anti-alias ringing, belong to the same hit), starting
         ``pretrigger`` samples before the crossing (default 1 % of the record); records
         with a second hit are rejected with an :class:`~mvtk.errors.AccuracyWarning`.
         Default window is rectangular and ``detrend=False``.
