@@ -189,18 +189,40 @@ def _zoh(A: np.ndarray, B: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarra
     return E[:n, :n], E[:n, n:]
 
 
-def _march(Phi: np.ndarray, Gam: np.ndarray, x0: np.ndarray, E: np.ndarray | None, n: int):
-    """x[k+1] = Phi x[k] + Gam e[k] for k < n - 1 (rows are samples)."""
-    X = np.empty((n, x0.size))
+def _march(Phi: np.ndarray, Gam: np.ndarray, x0: np.ndarray, E: np.ndarray | None, n: int,
+           block: int = 64):
+    """x[k+1] = Phi x[k] + Gam e[k] for k < n - 1 (rows are samples).
+
+    Advanced in blocks of ``block`` samples with the powers ``Phi^j`` and the Markov
+    parameters ``Phi^j Gam`` (a lower-triangular Toeplitz product for the forced part),
+    so that the Python loop runs n / block times.
+    """
+    N = x0.size
+    block = max(1, min(block, n))
+    pows = np.empty((block + 1, N, N))  # Phi^0 .. Phi^block
+    pows[0] = np.eye(N)
+    for j in range(block):
+        pows[j + 1] = Phi @ pows[j]
+    X = np.empty((n, N))
     X[0] = x0
-    PhiT = Phi.T
-    if E is None:
-        for k in range(n - 1):
-            X[k + 1] = X[k] @ PhiT
-    else:
-        forced = E @ Gam.T
-        for k in range(n - 1):
-            X[k + 1] = X[k] @ PhiT + forced[k]
+    if E is not None:
+        ne = E.shape[1]
+        markov = pows[:block] @ Gam  # (block, N, ne): Phi^m Gam
+        # T[j, :, i, :] = Phi^(j - i) Gam for i <= j  (state j + 1 of the block)
+        T = np.zeros((block, N, block, ne))
+        for j in range(block):
+            T[j, :, : j + 1, :] = markov[j::-1].transpose(1, 0, 2)
+        T = T.reshape(block * N, block * ne)
+    P = pows[1:].reshape(block * N, N)  # rows: Phi^(j+1), j = 0..block-1
+    k = 0
+    while k < n - 1:
+        m = min(block, n - 1 - k)
+        nxt = (P[: m * N] @ X[k]).reshape(m, N)
+        if E is not None:
+            eb = E[k: k + m].reshape(-1)
+            nxt += (T[: m * N, : m * ne] @ eb).reshape(m, N)
+        X[k + 1: k + 1 + m] = nxt
+        k += m
     return X
 
 
