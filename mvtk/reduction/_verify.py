@@ -72,8 +72,9 @@ class ModeComparison:
     ----------
     fe_hz, se_hz : ndarray, shape (n,)
         Natural frequencies in Hz, ascending.
-    mac_matrix : ndarray, shape (n, n)
-        MAC between FE modes (rows) and expanded SE modes (columns), mass-weighted.
+    mac_matrix : ndarray, shape (n, m)
+        MAC between FE modes (rows) and expanded SE modes (columns), mass-weighted;
+        ``m >= n`` SE modes (a few extra, to find swapped partners).
     """
 
     fe_hz: np.ndarray
@@ -95,8 +96,19 @@ class ModeComparison:
         """MAC of each FE mode with the SE mode of the same number."""
         return np.diag(self.mac_matrix).copy()
 
+    @property
+    def se_match(self) -> np.ndarray:
+        """1-based number of the SE mode with the largest MAC for each FE mode."""
+        return np.argmax(self.mac_matrix, axis=1) + 1
+
+    @property
+    def mac_match(self) -> np.ndarray:
+        """Largest MAC of each FE mode over the SE modes."""
+        return np.max(self.mac_matrix, axis=1)
+
     def to_dataframe(self):
-        """Columns mode, fe_hz, se_hz, error_pct, error_pct_of_se, mac."""
+        """Columns mode, fe_hz, se_hz, error_pct, error_pct_of_se, mac, se_match,
+        mac_match (rows paired by mode number as in the paper; ``se_match`` flags swaps)."""
         import pandas as pd
 
         return pd.DataFrame(
@@ -107,6 +119,8 @@ class ModeComparison:
                 "error_pct": self.error_pct,
                 "error_pct_of_se": self.error_pct_of_se,
                 "mac": self.mac_diagonal,
+                "se_match": self.se_match,
+                "mac_match": self.mac_match,
             }
         )
 
@@ -149,7 +163,9 @@ def compare_modes(model: FEModel | None, se: SuperElement, n: int = 4) -> ModeCo
         )
     fe = eigsh_lowest(model.K, model.M, n)
     w2_se, v_se = _se_modes(se, n)
-    phi_se = se.expand(v_se)
+    extra = reduced_modes(se.K, se.M)
+    m = min(extra.omega2.size, n + 4)
+    phi_se = se.expand(extra.vectors[:, :m])
     macm = mac(fe.vectors, phi_se, weight=model.M)
     to_hz = lambda w2: np.sqrt(np.clip(w2, 0, None)) / (2 * np.pi)  # noqa: E731
     return ModeComparison(fe_hz=to_hz(fe.omega2), se_hz=to_hz(w2_se), mac_matrix=macm)

@@ -30,7 +30,9 @@ def test_paper_table5_error_convention():
     """The paper's % errors (Table 5) are relative to the SE frequency."""
     fe = np.array([13.811, 42.673, 145.49, 150.16])
     se = np.array([14.249, 43.414, 152.54, 154.38])
-    cmp = ModeComparison(fe_hz=fe, se_hz=se, mac_matrix=np.eye(4))
+    cmp = ModeComparison(fe_hz=fe, se_hz=se, mac_matrix=np.eye(4)[:, [1, 0, 2, 3]])
+    np.testing.assert_array_equal(cmp.se_match, [2, 1, 3, 4])  # a swapped pair is flagged
+    np.testing.assert_array_equal(cmp.mac_diagonal, [0, 0, 1, 1])
     np.testing.assert_allclose(np.round(cmp.error_pct_of_se, 2), [3.07, 1.71, 4.62, 2.73])
     np.testing.assert_allclose(cmp.error_pct, 100 * (se - fe) / fe)
 
@@ -39,12 +41,14 @@ def test_compare_modes_truncated(beam):
     se = craig_bampton(beam, ["mid", "tip"], 2)
     cmp = compare_modes(beam, se, 4)
     df = cmp.to_dataframe()
-    assert list(df.columns) == ["mode", "fe_hz", "se_hz", "error_pct", "error_pct_of_se", "mac"]
+    assert list(df.columns) == ["mode", "fe_hz", "se_hz", "error_pct", "error_pct_of_se", "mac",
+                                "se_match", "mac_match"]
+    np.testing.assert_array_equal(cmp.se_match, [1, 2, 3, 4])
     assert np.all(cmp.error_pct >= -1e-8)
     assert cmp.error_pct[0] < 0.01 and cmp.error_pct[3] > 0.1
     assert np.all(cmp.mac_diagonal > 0.98)
-    off = cmp.mac_matrix - np.diag(cmp.mac_diagonal)
-    assert off.max() < 0.02
+    off = cmp.mac_matrix[:, :4] - np.diag(cmp.mac_diagonal)
+    assert off.max() < 0.02 and cmp.mac_matrix.shape == (4, 6)  # all 6 SE modes
 
 
 def test_compare_modes_all_kept_is_exact(beam):
