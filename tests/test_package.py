@@ -51,3 +51,15 @@ def test_femodel_lookup_and_errors():
     with pytest.raises(DimensionError):
         FEModel(np.zeros((2, 3)), sp.eye(2), sp.eye(3), [0, 1], [0, 0])
     assert model.expand(np.ones(10)).shape == (10, 6)
+
+
+def test_free_free_chain_finds_rigid_body_mode():
+    n, k = 600, 1e4
+    K = sp.diags([2 * k * np.ones(n), -k * np.ones(n - 1), -k * np.ones(n - 1)], [0, 1, -1])
+    K = K.tolil()
+    K[0, 0] = K[n - 1, n - 1] = k  # free-free: one rigid-body mode
+    sol = eigsh_lowest(K.tocsr(), sp.identity(n), 4)
+    j = np.arange(0, 4)
+    exact = 2 * np.sqrt(k) * np.sin(j * np.pi / (2 * n))  # free-free chain
+    assert abs(sol.omega2[0]) < 1e-8 * exact[1] ** 2
+    np.testing.assert_allclose(np.sqrt(np.abs(sol.omega2[1:])), exact[1:], rtol=1e-8)
