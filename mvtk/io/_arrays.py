@@ -10,7 +10,7 @@ import xarray as xr
 
 from ..errors import FormatError, ParameterError
 from ._build import assemble
-from ._model import fs_from_dt, time_history
+from ._model import build_time_history, fs_from_dt
 from ._text import check_time_stamps
 
 __all__ = ["build_from_arrays"]
@@ -147,7 +147,7 @@ def build_from_arrays(
             "(one per channel)"
         )
     var_attrs = {"t0_s": extra.pop("t0_s")} if "t0_s" in extra else None
-    variables = [time_history(block, rate, names, units, quantity, attrs=var_attrs)]
+    variables = [build_time_history(block, rate, names, units, quantity, attrs=var_attrs)]
     if spectra:
         if frequency is None:
             raise FormatError(f"{path}: spectra given without frequency='<name>' of the axis in Hz")

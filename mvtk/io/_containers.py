@@ -18,7 +18,7 @@ from ..errors import (
 from ._arrays import build_from_arrays
 from ._build import assemble, clean_attrs
 from ._mat5 import check_mat5
-from ._model import fs_from_dt, normalize_units, time_history
+from ._model import build_time_history, fs_from_dt, normalize_units
 from ._netcdf import HDF5_MAGIC, read_netcdf
 
 __all__ = [
@@ -361,7 +361,7 @@ def read_tdms(path: Path, *, units=None, fs=None, allow_truncated=False):
             attrs["start_time"] = start
         block = np.stack([m["data"] for m in members])
         variables.append(
-            time_history(
+            build_time_history(
                 block,
                 rate,
                 [m["name"] for m in members],
@@ -417,7 +417,7 @@ def read_wav(path: Path, *, calibration=None, units=None, quantity=None, channel
             )
         return assemble(
             [
-                time_history(
+                build_time_history(
                     block.astype(np.float64),
                     rate,
                     names,
@@ -442,4 +442,4 @@ def read_wav(path: Path, *, calibration=None, units=None, quantity=None, channel
         "wav_dtype": str(samples.dtype),
         "calibration": " ".join(repr(float(c)) for c in cal.ravel()),
     }
-    return assemble([time_history(data, rate, names, units, quantity, attrs=attrs)])
+    return assemble([build_time_history(data, rate, names, units, quantity, attrs=attrs)])

@@ -205,6 +205,34 @@ def time_history(
     """
     from ._validate import validate
 
+    return validate(
+        build_time_history(
+            data,
+            fs,
+            channels,
+            units,
+            quantity,
+            node=node,
+            direction=direction,
+            attrs=attrs,
+            n_missing=n_missing,
+        )
+    )
+
+
+def build_time_history(
+    data,
+    fs,
+    channels,
+    units,
+    quantity=None,
+    *,
+    node=None,
+    direction=None,
+    attrs=None,
+    n_missing=None,
+) -> xr.DataArray:
+    """:func:`time_history` without the final validation (readers validate once in ``read``)."""
     arr = np.asarray(data)
     if arr.ndim == 1:
         arr = arr[np.newaxis, :]
@@ -257,7 +285,6 @@ def time_history(
         attrs=all_attrs,
     )
     da.time.attrs["units"] = "s"
-    validate(da)
     return da
 
 

@@ -41,7 +41,7 @@ def read_netcdf(path: Path):
     try:
         with xr.open_dataset(path, engine=engine, decode_times=False) as ds:
             return ds.load()
-    except (OSError, ValueError, KeyError, TypeError) as err:
+    except (OSError, ValueError, KeyError, TypeError, RuntimeError) as err:
         raise FormatError(
             f"{path}: not a readable netCDF file ({type(err).__name__}: {err})"
         ) from err

@@ -20,6 +20,7 @@ a spectrum when ``df_hz`` is given.
 
 from __future__ import annotations
 
+import os
 import re
 import warnings
 from pathlib import Path
@@ -29,13 +30,33 @@ import pandas as pd
 
 from ..errors import FormatError, MvtkWarning, ParameterError
 from ._build import assemble, clean_attrs
-from ._model import fs_from_dt, normalize_units, split_name_units, time_history
+from ._model import build_time_history, fs_from_dt, normalize_units, split_name_units
 
 __all__ = ["read_text", "sniff_text", "check_time_stamps", "TEXT_EXTENSIONS"]
 
 TEXT_EXTENSIONS = (".csv", ".tsv", ".txt", ".dat", ".asc", ".prn")
 _HEAD_BYTES = 1 << 18
-_NA_TOKENS = ["", "NaN", "nan", "NAN", "NA", "N/A", "#N/A", "null", "NULL", "-nan", "-NaN"]
+_NA_TOKENS = [  # pandas' default missing-value markers
+    "",
+    "#N/A",
+    "#N/A N/A",
+    "#NA",
+    "-1.#IND",
+    "-1.#QNAN",
+    "-NaN",
+    "-nan",
+    "1.#IND",
+    "1.#QNAN",
+    "<NA>",
+    "N/A",
+    "NA",
+    "NULL",
+    "NaN",
+    "None",
+    "n/a",
+    "nan",
+    "null",
+]
 _NA_SET = frozenset(_NA_TOKENS)
 _TIME_NAMES = {"time", "t", "zeit", "timestamp", "time_s", "tiempo", "temps", "x_time"}
 _TIME_SCALE = {"s": 1.0, "sec": 1.0, "seconds": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6}
@@ -62,6 +83,7 @@ _CHANNEL_KEYS = {
     "direction": "direction",
     "directions": "direction",
 }
+_LAYOUT_LINES = 400  # header + first data lines examined for the layout
 _DELIMS = (",", ";", "\t", None)  # None = runs of blanks
 _NUM = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
 
@@ -105,7 +127,7 @@ def _find_layout(lines: list[str]) -> tuple[int, str | None, str, int] | None:
     nothing); the field count is the most common one among the next six data lines.
     """
     best = None
-    non_empty = [i for i, ln in enumerate(lines) if ln.strip()]
+    non_empty = [i for i, ln in enumerate(lines) if ln.strip()][:_LAYOUT_LINES]
     for delim in _DELIMS:
         for decimal in (".", ","):
             if decimal == "," and delim == ",":
@@ -490,37 +512,19 @@ def read_text(
     if direction is not None:
         direction = _pick(direction, ch_cols, n_fields, path, "direction")
 
-    # numeric block: pandas C parser
-    try:
-        df = pd.read_csv(
-            path,
-            sep=r"\s+" if delim is None else delim,
-            decimal=dec,
-            header=None,
-            skiprows=start,
-            dtype=np.float64,
-            engine="c",
-            na_values=_NA_TOKENS,
-            keep_default_na=False,
-            encoding="latin-1",
-            skip_blank_lines=True,
-        )
-    except (ValueError, pd.errors.ParserError) as err:
-        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
-        _diagnose(path, start, delim, dec, all_names, encoding)
-        raise FormatError(f"{path}: data block could not be parsed: {err}") from err
-    if df.shape[1] != n_fields:
-        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+    # numeric block: pandas C parser, chunk by chunk into one preallocated array
+    all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+    block, n_rows, has_nan = _read_block(path, lines, start, delim, dec, n_fields)
+    if block is None:
         _diagnose(path, start, delim, dec, all_names, encoding)
         raise FormatError(
-            f"{path}: data has {df.shape[1]} columns; expected {n_fields} as in the header"
+            f"{path}: data block could not be parsed; expected {n_fields} numeric columns"
         )
-    arr = df.to_numpy()
-    del df
+    if n_rows == 0:
+        raise FormatError(f"{path}: no data lines after the header at line {start}")
+    arr = block[:, :n_rows]
     n_missing = np.zeros(n_fields, dtype=np.int64)
-    nan_cols = np.isnan(arr).any(axis=0)
-    if nan_cols.any():
-        all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
+    if has_nan:
         n_missing = _diagnose(path, start, delim, dec, all_names, encoding)
     t_first_line = start + 1
     if tcol is not None:
@@ -530,7 +534,7 @@ def read_text(
             raise FormatError(
                 f"{path}{where}: time column {tname!r} in {tunit!r}; expected s, ms or us"
             )
-        t = arr[:, tcol] * scale
+        t = arr[tcol] * scale
         rate = check_time_stamps(t, path, t_first_line)
         if header_fs is not None and not np.isclose(rate, header_fs, rtol=1e-6):
             raise FormatError(
@@ -549,9 +553,9 @@ def read_text(
                 "'time' or a header line 'sample rate: <Hz>' (or 'dt: <s>'), or pass fs="
             )
     if ch_cols == list(range(ch_cols[0], ch_cols[0] + n_ch)):
-        data = arr.T[ch_cols[0] : ch_cols[0] + n_ch]
+        data = arr[ch_cols[0] : ch_cols[0] + n_ch]
     else:
-        data = arr.T[ch_cols]
+        data = arr[ch_cols]
     missing = n_missing[ch_cols]
     if missing.any():
         listed = ", ".join(f"{ch_names[j]!r}: {int(m)}" for j, m in enumerate(missing) if m)
@@ -561,7 +565,7 @@ def read_text(
             MvtkWarning,
             stacklevel=3,
         )
-    da = time_history(
+    da = build_time_history(
         data,
         rate,
         ch_names,
@@ -573,6 +577,56 @@ def read_text(
         n_missing=missing,
     )
     return assemble([da], clean_attrs(attrs))
+
+
+def _read_block(path, lines, start, delim, dec, n_fields):
+    """Parse the data lines into a (column, row) float64 array.
+
+    Returns ``(block, n_rows, has_nan)``; ``block`` is None when a chunk does not parse
+    as ``n_fields`` numeric columns. The array is allocated once from an estimate of the
+    row count (pages never written are never committed), so the peak memory stays near
+    one copy of the data.
+    """
+    head_bytes = sum(len(ln) + 1 for ln in lines[:start])
+    sample = [len(ln) + 1 for ln in lines[start:] if ln.strip()]
+    avg = max(sum(sample) / max(len(sample), 1), 2.0)
+    remaining = max(os.path.getsize(path) - head_bytes, 0)
+    cap = int(remaining / avg * 1.05) + 64
+    block = np.empty((n_fields, cap), dtype=np.float64)
+    chunk_rows = max(1000, 4_000_000 // n_fields)
+    n_rows, has_nan = 0, False
+    try:
+        reader = pd.read_csv(
+            path,
+            sep=r"\s+" if delim is None else delim,
+            decimal=dec,
+            header=None,
+            skiprows=start,
+            engine="c",
+            encoding="utf-8",
+            encoding_errors="replace",
+            skip_blank_lines=True,
+            chunksize=chunk_rows,
+        )
+        with reader:
+            for chunk in reader:
+                if chunk.shape[1] != n_fields:
+                    return None, 0, False
+                values = chunk.to_numpy(dtype=np.float64)
+                m = values.shape[0]
+                if n_rows + m > cap:
+                    cap = int((n_rows + m) * 1.25) + 64
+                    grown = np.empty((n_fields, cap), dtype=np.float64)
+                    grown[:, :n_rows] = block[:, :n_rows]
+                    block = grown
+                block[:, n_rows : n_rows + m] = values.T
+                has_nan = has_nan or bool(np.isnan(values).any())
+                n_rows += m
+    except (ValueError, TypeError, pd.errors.ParserError):
+        return None, 0, False
+    except pd.errors.EmptyDataError:
+        return block, 0, False
+    return block, n_rows, has_nan
 
 
 def _pick(values: list[str], ch_cols: list[int], n_fields: int, path: Path, what: str):

@@ -16,7 +16,7 @@ from ..errors import (
     UnsupportedFormatError,
 )
 from ._build import assemble
-from ._model import fs_from_dt, infer_quantity, normalize_units, time_history
+from ._model import build_time_history, fs_from_dt, infer_quantity, normalize_units
 
 __all__ = ["read_uff", "sniff_uff", "UFF_EXTENSIONS", "FUNCTION_TYPES"]
 
@@ -184,7 +184,7 @@ def _time_variables(items: list[dict], path: Path) -> list[xr.DataArray]:
         for k, m in enumerate(members):
             data[k] = m["data"]
         attrs = {"t0_s": t0} if t0 != 0.0 else {}
-        da = time_history(
+        da = build_time_history(
             data,
             fs,
             names,

@@ -91,11 +91,15 @@ def _check_values(da: xr.DataArray, cdim: str, label: str, where: str) -> None:
     values = np.asarray(da.values)
     if values.dtype.kind not in "fc":
         raise FormatError(f"{label}{where}: expected float samples, got dtype {values.dtype}")
-    if np.isinf(values).any():
+    finite = np.isfinite(values)
+    if finite.all():
+        nan_count = np.zeros(values.shape[0], dtype=np.int64)
+    elif np.isinf(values).any():
         ch, i = np.argwhere(np.isinf(values))[0][:2]
         name = da[cdim].values[ch] if values.ndim == 2 else ch
         raise FormatError(f"{label}{where}: infinite value in channel {name!r} at sample {i}")
-    nan_count = np.isnan(values).reshape(values.shape[0], -1).sum(axis=1)
+    else:
+        nan_count = (~finite).reshape(values.shape[0], -1).sum(axis=1)
     m_name = "n_missing" + cdim[len("channel") :]
     marked = (
         np.asarray(da[m_name].values)

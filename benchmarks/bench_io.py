@@ -1,0 +1,181 @@
+# ruff: noqa: UP031  (UFF records are fixed-width Fortran formats)
+"""Read throughput of mvtk.io against its peers, in one run.
+
+1. CSV: a DAQ-style export (metadata lines, time column, units in the header) of
+   16 channels x 10 min x 10 kHz (96 M samples, ~1.2 GB of text) read by
+   ``mvtk.io.read`` and by ``pandas.read_csv`` (C parser) on the same file.
+2. UFF 58b: 16 binary float64 records read by ``mvtk.io.read`` and by plain
+   ``pyuff.UFF(path).read_sets()``.
+
+Every read runs in a fresh subprocess so its peak resident memory (ru_maxrss minus the
+resident size after imports) is its own. Targets (issue 2): CSV within 1.2x of pandas
+and peak memory under 2x the data size; UFF overhead under 1.2x.
+
+Usage::
+
+    .venv/bin/python benchmarks/bench_io.py                # the full 10-minute file
+    .venv/bin/python benchmarks/bench_io.py --minutes 1    # a quicker look
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HEADER_LINES = 2  # metadata lines before the column-name line
+
+
+def rss_mb() -> float:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
+def worker(kind: str, path: str) -> None:
+    """Run one read in this process and print JSON with time and memory."""
+    import pandas as pd  # noqa: F401  (imports outside the timed region)
+
+    import mvtk.io
+
+    if kind.startswith("uff"):
+        import pyuff
+    base = rss_mb()
+    t0 = time.perf_counter()
+    if kind == "csv-mvtk":
+        ds = mvtk.io.read(path)
+        n = ds["time_history"].size
+    elif kind == "csv-pandas":
+        df = pd.read_csv(path, skiprows=HEADER_LINES, header=0, engine="c")
+        n = df.shape[0] * (df.shape[1] - 1)
+    elif kind == "uff-mvtk":
+        ds = mvtk.io.read(path)
+        n = ds["time_history"].size
+    elif kind == "uff-pyuff":
+        sets = pyuff.UFF(path).read_sets()
+        n = sum(s["data"].size for s in sets)
+    else:
+        raise SystemExit(f"unknown worker {kind}")
+    seconds = time.perf_counter() - t0
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    print(json.dumps({"seconds": seconds, "samples": n, "peak_mb": peak - base}))
+
+
+def run(kind: str, path: Path) -> dict:
+    out = subprocess.run(
+        [sys.executable, __file__, "--worker", kind, str(path)],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def write_csv(path: Path, n_ch: int, fs: float, n: int, rng: np.random.Generator) -> None:
+    names = ",".join(f"acc{k + 1:02d} [m/s^2]" for k in range(n_ch))
+    chunk = 200_000
+    with open(path, "w") as fh:
+        fh.write(f"# instrument: mvtk benchmark\n# sample rate: {fs:g} Hz\ntime [s],{names}\n")
+        fmt = ",".join(["%.4f"] + ["%.6g"] * n_ch)
+        for start in range(0, n, chunk):
+            m = min(chunk, n - start)
+            block = np.empty((m, n_ch + 1))
+            block[:, 0] = (start + np.arange(m)) / fs
+            block[:, 1:] = rng.standard_normal((m, n_ch))
+            np.savetxt(fh, block, fmt=fmt)
+
+
+def write_uff58b(path: Path, n_rec: int, n: int, fs: float, rng: np.random.Generator) -> None:
+    with open(path, "wb") as fh:
+        for k in range(n_rec):
+            payload = rng.standard_normal(n).astype("<f8").tobytes()
+            head = [
+                "    -1",
+                "    58b     1     2          11%12i     0     0           0           0"
+                % len(payload),
+                f"acc{k + 1:02d}",
+                "NONE",
+                "NONE",
+                "NONE",
+                "NONE",
+                "    1         0    0         0 acc%02d    %10i   3 NONE               0   0"
+                % (k + 1, k + 1),
+                "         4%10i         1  0.00000E+00%13.5e  0.00000E+00" % (n, 1 / fs),
+                "        17    0    0    0 Time                 s                   ",
+                "        12    0    0    0 Acceleration         m/s2                ",
+                "         0    0    0    0 NONE                 NONE                ",
+                "         0    0    0    0 NONE                 NONE                ",
+            ]
+            fh.write(("\n".join(head) + "\n").encode() + payload + b"\n    -1\n")
+
+
+def best(kind: str, path: Path, repeats: int) -> dict:
+    results = [run(kind, path) for _ in range(repeats)]
+    fastest = min(results, key=lambda r: r["seconds"])
+    fastest["peak_mb"] = max(r["peak_mb"] for r in results)
+    return fastest
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--minutes", type=float, default=10.0)
+    parser.add_argument("--channels", type=int, default=16)
+    parser.add_argument("--fs", type=float, default=10_000.0)
+    parser.add_argument("--repeats", type=int, default=2)
+    parser.add_argument("--uff-samples", type=int, default=1_000_000)
+    parser.add_argument("--worker", nargs=2, metavar=("KIND", "PATH"))
+    args = parser.parse_args()
+    if args.worker:
+        worker(*args.worker)
+        return
+    rng = np.random.default_rng(20261122)
+    n = int(round(args.minutes * 60 * args.fs))
+    with tempfile.TemporaryDirectory(prefix="mvtk-bench-") as tmp:
+        csv = Path(tmp) / "big.csv"
+        t0 = time.perf_counter()
+        write_csv(csv, args.channels, args.fs, n, rng)
+        size_mb = os.path.getsize(csv) / 2**20
+        data_mb = args.channels * n * 8 / 2**20
+        print(
+            f"CSV: {args.channels} ch x {n} samples ({args.minutes:g} min at {args.fs:g} Hz), "
+            f"{size_mb:.0f} MiB of text, {data_mb:.0f} MiB as float64 "
+            f"(written in {time.perf_counter() - t0:.0f} s)"
+        )
+        m = best("csv-mvtk", csv, args.repeats)
+        p = best("csv-pandas", csv, args.repeats)
+        for label, r in (("mvtk.io.read", m), ("pandas.read_csv", p)):
+            print(
+                f"  {label:16s} {r['seconds']:7.2f} s  {r['samples'] / r['seconds'] / 1e6:6.2f} "
+                f"M samples/s  peak +{r['peak_mb']:.0f} MiB ({r['peak_mb'] / data_mb:.2f}x data)"
+            )
+        print(f"  time ratio mvtk/pandas = {m['seconds'] / p['seconds']:.3f} (target <= 1.2)")
+        csv.unlink()
+
+        uff = Path(tmp) / "big.uff"
+        write_uff58b(uff, args.channels, args.uff_samples, args.fs, rng)
+        print(
+            f"UFF 58b: {args.channels} records x {args.uff_samples} float64 samples "
+            f"({os.path.getsize(uff) / 2**20:.0f} MiB)"
+        )
+        m = best("uff-mvtk", uff, args.repeats)
+        p = best("uff-pyuff", uff, args.repeats)
+        for label, r in (("mvtk.io.read", m), ("pyuff read_sets", p)):
+            print(
+                f"  {label:16s} {r['seconds']:7.2f} s  {r['samples'] / r['seconds'] / 1e6:6.2f} "
+                f"M samples/s  peak +{r['peak_mb']:.0f} MiB"
+            )
+        print(f"  time ratio mvtk/pyuff = {m['seconds'] / p['seconds']:.3f} (target <= 1.2)")
+
+
+if __name__ == "__main__":
+    main()
