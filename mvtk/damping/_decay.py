@@ -184,6 +184,13 @@ def log_decrement(
     out = []
     for name, sig in zip(names, data):
         guess = fn_hz or _fn_guess(sig, fs)
+        if fs / guess < 10:
+            warnings.warn(
+                f"log_decrement: channel {name!r} has only {fs / guess:.2g} samples per period "
+                f"of the {guess:.4g} Hz mode; interpolated peak amplitudes are biased (up to "
+                "about 1 % in zeta): use >= 10 samples per period or envelope_fit",
+                ResolutionWarning, stacklevel=2,
+            )
         t, amp = _peaks(sig, fs, guess)
         settle = _settle_s(band)
         keep = np.flatnonzero((amp > 0) & (t >= settle) & (t <= sig.size / fs - settle))
