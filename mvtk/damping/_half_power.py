@@ -417,7 +417,8 @@ def _warn(r: HalfPowerResult, min_lines: float, df: float, max_scatter: float) -
             f"half_power: fewer than {min_lines:g} frequency lines (df = {df:.4g} Hz, record "
             f"{1 / df:.4g} s) across the half-power band of {len(coarse)} mode(s); the damping "
             "is unreliable (overestimated by leakage on short transient records): "
-            + "; ".join(parts) + ". Use a longer record or envelope_fit/log_decrement on the free decay.",
+            + "; ".join(parts)
+            + ". Use a longer record or envelope_fit/log_decrement on the free decay.",
             ResolutionWarning, stacklevel=3,
         )
     noisy = [i for i, q in enumerate(r.quality) if q == "noisy"]
