@@ -88,7 +88,9 @@ class ComparisonResult:
         return {"rows": [{k: clean(v) for k, v in r.items()} for r in self.rows]}
 
 
-def compare_controllers(plant, controllers: Mapping, scenario: Scenario) -> ComparisonResult:
+def compare_controllers(
+    plant, controllers: Mapping, scenario: Scenario, methods: Mapping | None = None
+) -> ComparisonResult:
     """Simulate the open loop and each controller on the same scenario and tabulate.
 
     Parameters
@@ -96,7 +98,10 @@ def compare_controllers(plant, controllers: Mapping, scenario: Scenario) -> Comp
     plant : SecondOrderSystem
     controllers : mapping name -> controller
     scenario : Scenario
+    methods : mapping name -> str, optional
+        Simulation method per controller (default ``scenario.method``).
     """
+    methods = dict(methods or {})
     if not isinstance(scenario, Scenario):
         raise ParameterError(f"scenario must be a Scenario, got {type(scenario).__name__}")
     if not isinstance(plant, SecondOrderSystem):
@@ -111,15 +116,15 @@ def compare_controllers(plant, controllers: Mapping, scenario: Scenario) -> Comp
     if scenario.release_mode is not None:
         x0 = release_state(plant, scenario.release_mode, scenario.output, scenario.amplitude)
 
-    def run(ctrl):
+    def run(ctrl, method):
         rng = np.random.default_rng(scenario.seed) if scenario.seed is not None else None
         return simulate(plant, ctrl, t_end=scenario.t_end, fs_out=scenario.fs_out, initial=x0,
                         disturbance=scenario.disturbance, noise_std=scenario.noise_std,
-                        rng=rng, method=scenario.method)
+                        rng=rng, method=method)
 
-    sims = {"open loop": run(None)}
+    sims = {"open loop": run(None, "auto")}
     for name, ctrl in controllers.items():
-        sims[str(name)] = run(ctrl)
+        sims[str(name)] = run(ctrl, methods.get(name, scenario.method))
     y_open = sims["open loop"].outputs.sel(output=scenario.output).values
     ref = scenario.amplitude if scenario.release_mode is not None else None
     ref = ref if ref else float(np.max(np.abs(y_open)))
@@ -162,7 +167,8 @@ def controller_from_dict(spec: Mapping, switching_peak: float | None = None):
     insensitive). Filter controllers take ``targets = [[f_hz, zeta_f, gain], ...]`` or a
     single ``f_hz``, ``zeta_f``, ``gain``. ``LyapunovBangBang`` takes ``boundary_layer``
     or ``boundary_layer_rel`` (times ``switching_peak``, the largest ``|B'q'|`` of the
-    open loop). ``name`` is ignored here. Other keys are passed to the controller.
+    open loop). ``name`` and ``method`` (the simulation method, read by
+    :func:`run_control_section`) are ignored here. Other keys go to the controller.
     """
     if not isinstance(spec, Mapping) or "type" not in spec:
         raise ConfigError(
@@ -174,7 +180,7 @@ def controller_from_dict(spec: Mapping, switching_peak: float | None = None):
             f"unknown controller type {spec['type']!r}; expected one of "
             "PPF, SRF, VelocityFeedback, LQR, LyapunovBangBang"
         )
-    args = {k: v for k, v in spec.items() if k not in ("type", "name")}
+    args = {k: v for k, v in spec.items() if k not in ("type", "name", "method")}
     cls = _CONTROLLERS[kind]
     if cls in (PPF, SRF):
         if "targets" in args:
@@ -227,6 +233,7 @@ def run_control_section(plant, section: Mapping) -> ComparisonResult:
         f_hz = 13.26
         zeta_f = 0.3
         gain = 0.5
+        method = "auto"                     # optional per controller, see simulate()
 
     ``controllers`` may also be a table of tables keyed by name.
     """
@@ -267,7 +274,7 @@ def run_control_section(plant, section: Mapping) -> ComparisonResult:
     peak = None
     if any("boundary_layer_rel" in c for c in ctrls):
         peak = switching_peak(plant, scenario)
-    controllers = {}
+    controllers, methods = {}, {}
     for i, spec in enumerate(ctrls):
         name = str(spec.get("name", f"controller{i + 1}"))
         if name in controllers or name == "open loop":
@@ -275,7 +282,9 @@ def run_control_section(plant, section: Mapping) -> ComparisonResult:
                 f"controller names must be unique and not 'open loop', got {name!r}"
             )
         controllers[name] = controller_from_dict(spec, peak)
-    return compare_controllers(plant, controllers, scenario)
+        if "method" in spec:
+            methods[name] = str(spec["method"])
+    return compare_controllers(plant, controllers, scenario, methods)
 
 
 def switching_peak(plant: SecondOrderSystem, scenario: Scenario, actuator: int = 0) -> float:

@@ -145,12 +145,14 @@ def test_run_control_section_with_the_study_schema():
         "controllers": [
             {"name": "PPF", "type": "PPF", "f_hz": F1, "zeta_f": 0.3, "gain": 0.5},
             {"name": "Lyapunov", "type": "LyapunovBangBang", "u_max": 5.0,
-             "boundary_layer_rel": 0.2},
+             "boundary_layer_rel": 0.2, "method": "LSODA"},
         ],
     }
     res = run_control_section(p, section)
     df = res.to_dataframe()
     assert list(df.index) == ["open loop", "PPF", "Lyapunov"]
+    assert res.simulations["Lyapunov"].attrs["method"] == "LSODA"
+    assert res.simulations["PPF"].attrs["method"] == "zoh"
     assert df.loc["PPF", "settling_time_s"] < 0.5
     assert df.loc["Lyapunov", "peak_voltage"] == pytest.approx(5.0)
 
