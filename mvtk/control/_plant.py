@@ -196,13 +196,30 @@ def _modal_damping_diag(zeta, n_kept, n_total, omega):
     return 2.0 * z * omega
 
 
-def _check_restrained(w2: np.ndarray, correct: bool) -> None:
-    """Static correction needs K^-1: refuse rigid-body modes (omega^2 ~ 0)."""
-    if correct and w2.size and w2[0] <= 1e-8 * abs(w2[-1]):
-        raise ParameterError(
-            "static correction needs a restrained structure, but a rigid-body mode was "
-            f"found (omega^2 = {w2[0]:.3g} (rad/s)^2); use static_correction=False"
-        )
+def _check_restrained(K, M, w2: np.ndarray, correct: bool) -> None:
+    """Static correction needs K^-1: refuse a structure with rigid-body modes.
+
+    A dense (super element) ``K`` must admit a Cholesky factor; for a sparse FE model the
+    lowest eigenvalue must exceed ``1e-10`` times the median of ``K_ii / M_ii``.
+    """
+    if not correct:
+        return
+    if isinstance(K, np.ndarray):
+        try:
+            np.linalg.cholesky(K)
+            return
+        except np.linalg.LinAlgError:
+            lowest = w2[0] if w2.size else 0.0
+    else:
+        d_k, d_m = K.diagonal(), M.diagonal()
+        scale = float(np.median(d_k[d_m > 0] / d_m[d_m > 0])) if np.any(d_m > 0) else 1.0
+        if not (w2.size and w2[0] <= 1e-10 * scale):
+            return
+        lowest = w2[0]
+    raise ParameterError(
+        "static correction needs a restrained structure, but K is singular (rigid-body "
+        f"mode, lowest omega^2 = {lowest:.3g} (rad/s)^2); use static_correction=False"
+    )
 
 
 def structural_plant(
@@ -325,7 +342,7 @@ def structural_plant(
         w2, phi = modes.omega2, modes.vectors
         B_r, C_r = se.T.T @ F, Cphys @ se.T
         correct = n_kept < n_total and static_correction
-        _check_restrained(w2, correct)
+        _check_restrained(se.K, se.M, w2, correct)
         if correct:
             flex = np.linalg.solve(se.K, B_r)
         w2, phi = w2[:n_kept], phi[:, :n_kept]
@@ -340,7 +357,7 @@ def structural_plant(
         w2, phi = sol.omega2, sol.vectors
         B_r, C_r = F, Cphys
         correct = n_kept < n_total and static_correction
-        _check_restrained(w2, correct)
+        _check_restrained(model.K, model.M, w2, correct)
         if correct:
             flex = solve_columns(factorize(model.K), F)
     omega = np.sqrt(np.clip(w2, 0.0, None))

@@ -278,3 +278,31 @@ def test_piezo_patch_input_in_volts():
     w_tip = x[model.dof_index(tip, "uz")]
     np.testing.assert_allclose(ss.dc_gain()[0, 0], w_tip, rtol=1e-8)
     assert w_tip > 0  # d31 < 0, patch on top: positive volts bend the tip up (+z)
+
+
+def test_shell_super_element_modal_form_and_massless_warning():
+    """MITC4 plate SE (smart beam, coarse): boundary drilling rotations carry no inertia.
+    The physical form warns; the truncated modal form keeps the DC gain and is not stiff."""
+    import tomllib
+    from pathlib import Path
+
+    from mvtk.errors import AccuracyWarning
+    from mvtk.fe import build_model, factorize
+
+    text = (Path(__file__).resolve().parents[2] / "data" / "structures" /
+            "smart_beam.toml").read_text().replace("element_size = 0.005",
+                                                   "element_size = 0.01")
+    model = build_model(tomllib.loads(text))
+    nodes = [model.nearest_node(p) for p in
+             ([0.005, 0.0665, 0], [0.055, 0.0665, 0], [0.18, 0.0665, 0])]
+    se = craig_bampton(model, nodes, 10)
+    f = dof_load(model, nodes[1], "ry") - dof_load(model, nodes[0], "ry")
+    kw = dict(inputs={"M": f}, outputs={"w": (nodes[2], "uz")}, alpha=ALPHA, beta=BETA)
+    with pytest.warns(AccuracyWarning, match="no inertia"):
+        structural_plant(se, **kw)
+    ss = structural_plant(se, form="modal", n_modes=8, **kw).to_state_space()
+    static = factorize(model.K).solve(f)[model.dof_index(nodes[2], "uz")]
+    np.testing.assert_allclose(ss.dc_gain()[0, 0], static, rtol=1e-8)
+    assert np.abs(ss.poles()).max() < 2 * np.pi * 2000.0
+    ref = harmonic(model, f, dof_load(model, nodes[2], "uz")[None, :], [5.0, 20.0])[0]
+    np.testing.assert_allclose(ss.frequency_response([5.0, 20.0])[0, 0], ref, rtol=1e-3)
