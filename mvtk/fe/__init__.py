@@ -1,6 +1,7 @@
 """Finite element modelling: sections, elements, meshes, assembly, solvers, piezo."""
 
 from ._assembly import assemble_element_matrices, assemble_shell_model
+from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
 from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._mesh import (
@@ -14,6 +15,13 @@ from ._mesh import (
 )
 from ._modal import ModalResult, modal_analysis, mode_type, static_solve
 from ._model import DOF_NAMES, FEModel
+from ._piezo import (
+    PiezoPatch,
+    edge_moment_load,
+    neutral_axis,
+    paper_eq7_moment_per_volt,
+    piezo_moment_per_volt,
+)
 from ._plate import SpringSupport, plate_model
 from ._shell import DRILL_FACTOR, mitc4_matrices
 from ._solvers import EigenSolution, eigsh_lowest, factorize
@@ -51,4 +59,13 @@ __all__ = [
     "load_structure",
     "get_by_path",
     "set_by_path",
+    "BeamPatch",
+    "BeamSection",
+    "beam_section",
+    "cantilever_beam",
+    "PiezoPatch",
+    "edge_moment_load",
+    "neutral_axis",
+    "paper_eq7_moment_per_volt",
+    "piezo_moment_per_volt",
 ]

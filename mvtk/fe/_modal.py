@@ -76,25 +76,27 @@ def _mirror_map(nodes: np.ndarray) -> np.ndarray | None:
 
 
 def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = None) -> str:
-    """Label an elastic mode shape of a plate-like model lying in the x-y plane.
+    """Label an elastic mode shape of a plate or beam model lying along x in the x-y plane.
 
-    ``"in-plane"`` when the in-plane translations (ux, uy) carry more of the shape's
-    translational norm than uz; otherwise ``"torsion"`` when the uz field is mainly
-    antisymmetric about the mid-width line y = (y_min + y_max)/2 (a strip along x
-    twisting), else ``"bending"``. For meshes without a mirror-symmetric node layout the
-    out-of-plane label is ``"bending"``. A heuristic for strips and plates clamped on an
-    x edge; it does not distinguish bending directions.
+    The modal kinetic energy ``phi_i (M phi)_i`` is summed per DOF component.
+    ``"in-plane"`` when ux and uy carry more of it than uz. Otherwise, for a plate (nodes
+    spread in y) ``"torsion"`` when the uz field is mainly antisymmetric about the
+    mid-width line y = (y_min + y_max)/2, else ``"bending"``; for a beam (all nodes on
+    a line) ``"torsion"`` when rx carries more energy than uz. A heuristic for strips and
+    plates clamped on an x edge; it does not distinguish bending directions.
     """
-    u = model.expand(np.asarray(shape, dtype=float))
-    inplane = float(np.sum(u[:, 0] ** 2 + u[:, 1] ** 2))
-    outplane = float(np.sum(u[:, 2] ** 2))
-    if inplane > outplane:
+    phi = np.asarray(shape, dtype=float)
+    e = phi * (model.M @ phi)
+    comp = np.bincount(model.dof_component, weights=e, minlength=6)
+    if comp[0] + comp[1] > comp[2]:
         return "in-plane"
+    if np.ptp(model.nodes[:, 1]) == 0:
+        return "torsion" if comp[3] > comp[2] else "bending"
     if mirror is None:
         mirror = _mirror_map(model.nodes)
     if mirror is None:
         return "bending"
-    w = u[:, 2]
+    w = model.expand(phi)[:, 2]
     anti = float(np.sum((w - w[mirror]) ** 2))
     sym = float(np.sum((w + w[mirror]) ** 2))
     return "torsion" if anti > sym else "bending"

@@ -27,7 +27,7 @@ All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example
     d31 = -210e-12
 
     [structure]
-    type = "plate"                        # "plate" (MITC4 shells)
+    type = "plate"                        # "plate" (MITC4 shells) or "beam" (see below)
     length = 0.18                         # along x (m)
     width = 0.133                         # along y (m)
     shear_correction = 0.8333333          # optional, default 5/6
@@ -68,7 +68,15 @@ All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example
     x = 0.18
     y = 0.0665
 
-Node sets of the model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
+A ``type = "beam"`` structure (layered Timoshenko beam along x,
+:func:`mvtk.fe.cantilever_beam`) takes the same materials, ``structure.length``,
+``width``, ``layers``; patches use ``x0``, ``x1``, ``layers`` and optionally ``y0``/``y1``
+(only their difference, the patch width, matters); ``[mesh] n_elements = 40`` (or
+``nx``); ``[boundary] clamp = "x0" | "x1" | "free"`` and ``clamp_stiffness`` /
+``clamp_translational_stiffness`` per metre of clamp edge as for plates (multiplied by the
+width to the beam's total spring); points by ``x`` (``y`` ignored).
+
+Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
 ``patch:<name>:x0`` ... ``:y1``, and one set per point.
 
 :func:`build_model` is deterministic: the same description gives the same model, so a
@@ -256,8 +264,10 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     materials = {str(k): _material(str(k), v) for k, v in mats_d.items()}
     st = _table(s, "structure", "")
     kind = st.get("type", "plate")
+    if kind == "beam":
+        return _build_beam(s, st, materials, source)
     if kind != "plate":
-        raise ConfigError(f"structure.type: expected 'plate', got {kind!r}")
+        raise ConfigError(f"structure.type: expected 'plate' or 'beam', got {kind!r}")
     length = _number(st, "length", "structure.")
     width = _number(st, "width", "structure.")
     ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
@@ -339,6 +349,68 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         )
     except ConfigError:
         raise
+    except MvtkError as err:
+        raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
+            from err
+
+
+def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
+    """The ``type = "beam"`` branch of :func:`build_model`."""
+    from ._beam import BeamPatch, cantilever_beam
+
+    length = _number(st, "length", "structure.")
+    width = _number(st, "width", "structure.")
+    ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
+    unknown = set(st) - {"type", "length", "width", "layers", "shear_correction"}
+    if unknown:
+        raise ConfigError(f"structure: unknown keys {sorted(unknown)}; expected type, length, "
+                          "width, layers, shear_correction")
+    layers = _plies(st.get("layers"), materials, "structure.layers")
+    patches = []
+    for i, p in enumerate(s.get("patches", [])):
+        w = f"patches[{i}]."
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"patches[{i}]: expected a table with a name")
+        x0 = _number(p, "x0", w, positive=False)
+        x1 = _number(p, "x1", w, positive=False)
+        pw = None
+        if "y0" in p or "y1" in p:
+            pw = _number(p, "y1", w, positive=False) - _number(p, "y0", w, positive=False)
+        plies = _plies(p.get("layers"), materials, w + "layers")
+        try:
+            patches.append(BeamPatch(p["name"], x0, x1, tuple(plies), width=pw))
+        except MvtkError as err:
+            raise ConfigError(f"patches[{i}]: {err}") from err
+    mesh = s.get("mesh", {})
+    if not isinstance(mesh, Mapping):
+        raise ConfigError("mesh: expected a table")
+    n_el = mesh.get("n_elements", mesh.get("nx", 40))
+    if isinstance(n_el, bool) or not isinstance(n_el, int) or n_el < 1:
+        raise ConfigError(f"mesh.n_elements: expected a positive integer, got {n_el!r}")
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    clamp = b.get("clamp", "x0")
+    if clamp not in ("x0", "x1", "free"):
+        raise ConfigError(f"boundary.clamp: expected x0, x1 or free for a beam, got {clamp!r}")
+    cs = _number(b, "clamp_stiffness", "boundary.", required=False)
+    cts = _number(b, "clamp_translational_stiffness", "boundary.", required=False)
+    points = {}
+    for i, p in enumerate(s.get("points", [])):
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name and x")
+        points[p["name"]] = _number(p, "x", f"points[{i}].", positive=False)
+    meta = {"structure": s}
+    if source is not None:
+        meta["source"] = source
+    try:
+        return cantilever_beam(
+            length, width, layers, n_elements=n_el, patches=patches,
+            clamp=None if clamp == "free" else clamp,
+            clamp_stiffness=None if cs is None else cs * width,
+            clamp_translational_stiffness=None if cts is None else cts * width,
+            points=points, shear_correction=ks, name=str(s.get("name", "")), meta=meta,
+        )
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err

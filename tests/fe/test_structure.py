@@ -143,3 +143,18 @@ def test_cli_modes_error_exit_code(tmp_path, capsys):
 
     assert main(["modes", str(tmp_path / "missing.toml")]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+def test_beam_structure_type_delegates_to_cantilever_beam():
+    model = build_model(DATA / "smart_beam_beam.toml")
+    assert "beam2" in model.elements
+    res = modal_analysis(model, 2)
+    assert res.mode_type == ("bending", "torsion")
+    # beam and plate models of the same nominal strip agree on the first bending mode
+    # within the plate-vs-beam modulus difference (1/(1 - nu^2) = 1.099 in stiffness)
+    f_plate = modal_analysis(build_model(DATA / "smart_beam.toml"), 1).fn_hz[0]
+    assert 0.95 < f_plate / res.fn_hz[0] < 1.06
+    s = load_structure(DATA / "smart_beam_beam.toml")
+    s["boundary"]["clamp"] = "y0"
+    with pytest.raises(ConfigError, match="boundary.clamp: expected x0, x1 or free"):
+        build_model(s)
