@@ -158,6 +158,9 @@ class SuperElement:
             )
         return self.T @ q
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self):
         """Table of reduced coordinates: label, kind, node, component, fn_hz."""
         import pandas as pd

@@ -74,6 +74,9 @@ class EffectiveMassTable:
         """Number of modes with ``fn_hz <= f_cut_hz``."""
         return int(np.count_nonzero(self.fn_hz <= f_cut_hz))
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self):
         """Columns mode, fn_hz, participation, effective_mass_kg, fraction, cumulative."""
         import pandas as pd

@@ -106,6 +106,9 @@ class ModeComparison:
         """Largest MAC of each FE mode over the SE modes."""
         return np.max(self.mac_matrix, axis=1)
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self):
         """Columns mode, fe_hz, se_hz, error_pct, error_pct_of_se, mac, se_match,
         mac_match (rows paired by mode number as in the paper; ``se_match`` flags swaps)."""
@@ -195,6 +198,9 @@ class StaticCheck:
         both = np.concatenate([self.rel_error_boundary, self.rel_error_full])
         return float(both.max()) if both.size else 0.0
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self):
         """Columns load, rel_error_boundary, rel_error_full."""
         import pandas as pd
@@ -274,6 +280,9 @@ class SizeTable:
     se_dof: int
     se_dof_6_per_node: int
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self):
         """Rows nodes, elements, DOF (free), DOF (6 per node); columns FE model, SE model."""
         import pandas as pd
@@ -312,6 +321,9 @@ class Verification:
     sizes: SizeTable
     modes: ModeComparison
     static: StaticCheck
+
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
 
     def to_dataframe(self):
         """The mode comparison table (the headline table; see the attributes for others)."""
