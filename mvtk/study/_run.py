@@ -178,7 +178,9 @@ def run(
 
     meas = cfg.get("measurements", {})
     meas_hashes = {p.name: hashes[p.name] for p in study.measurement_files.values()}
-    do("ingest", (), bool(meas), [meas_hashes, meas], lambda: st.ingest(study))
+    # keyed by file content, not by the path spelling in the study file
+    meas_key = {k: {kk: vv for kk, vv in v.items() if kk != "file"} for k, v in meas.items()}
+    do("ingest", (), bool(meas), [meas_hashes, meas_key], lambda: st.ingest(study))
     do("fe", (), True, [hashes[study.structure_file.name], cfg.get("fe", {})],
        lambda: st.fe_nominal(study))
     do("damping", ("ingest", "fe"), "damping" in cfg, [cfg.get("damping", {})],
