@@ -23,11 +23,11 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 
-PARAMS = [
-    ("materials.steel.E", 1.5e11, 2.5e11),
-    ("boundary.clamp_stiffness", 10.0, 1e6),
-    ("materials.pic151.E", 3e10, 1e11),
-    ("materials.epoxy.E", 1e9, 1e10),
+PARAMS = [  # path, lower, upper, log-scaled
+    ("materials.steel.E", 1.5e11, 2.5e11, False),
+    ("boundary.clamp_stiffness", 10.0, 1e6, True),
+    ("materials.pic151.E", 3e10, 1e11, False),
+    ("materials.epoxy.E", 1e9, 1e10, False),
 ]
 
 
@@ -48,14 +48,14 @@ def main() -> None:
     d["mesh"] = {"element_size": a.element_size}
     d["boundary"]["clamp_stiffness"] = 1e4
     chosen = PARAMS[: a.n_params]
-    params = [Parameter(p, lower=lo, upper=hi) for p, lo, hi in chosen]
+    params = [Parameter(p, lower=lo, upper=hi, log=lg) for p, lo, hi, lg in chosen]
     targets = [FrequencyTarget(13.26, label="f1"), FrequencyTarget(41.14, label="f2")]
 
     t0 = time.perf_counter()
     model = build_model(d)
     print(f"model: {model.n_dof} DOF, {model.n_elements} elements "
           f"(first build {time.perf_counter() - t0:.2f} s)")
-    print(f"parameters: {[p for p, _, _ in chosen]}; matrix differences: {a.difference}")
+    print(f"parameters: {[c[0] for c in chosen]}; matrix differences: {a.difference}")
 
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
@@ -84,17 +84,26 @@ def main() -> None:
 
     if a.no_peer:
         return
-    # peer: least_squares with a 2-point finite-difference Jacobian, same residuals
+    # peer: least_squares with a 2-point finite-difference Jacobian, same residuals and
+    # the same (log-)scaled variables
     scale = np.array([p.resolve(d)[1] for p in params])
-    x0 = np.array([p.resolve(d)[0] for p in params]) / scale
-    lb = np.array([lo for _, lo, _ in chosen]) / scale
-    ub = np.array([hi for _, _, hi in chosen]) / scale
+    logs = np.array([c[3] for c in chosen])
+
+    def to_x(v):
+        return np.where(logs, np.log(v / scale), v / scale)
+
+    def to_p(x):
+        return np.where(logs, scale * np.exp(np.where(logs, x, 0.0)), scale * x)
+
+    x0 = to_x(np.array([p.resolve(d)[0] for p in params]))
+    lb = to_x(np.array([c[1] for c in chosen]))
+    ub = to_x(np.array([c[2] for c in chosen]))
     ft = np.array([t.fn_hz for t in targets])
     n_eval = [0]
 
     def resid(x):
         n_eval[0] += 1
-        m = build_model(with_values(d, {p.path: v for p, v in zip(params, x * scale)}))
+        m = build_model(with_values(d, {p.path: v for p, v in zip(params, to_p(x))}))
         eig = eigsh_lowest(m.K, m.M, 6, sigma=-0.1 * (2 * np.pi * 13.0) ** 2)
         f = np.sqrt(eig.omega2[: ft.size]) / (2 * np.pi)
         res = (f - ft) / ft
@@ -107,7 +116,7 @@ def main() -> None:
                         xtol=1e-10, ftol=1e-12, gtol=1e-12, max_nfev=50)
     peer = time.perf_counter() - t0
     print(f"\npeer least_squares(jac='2-point'): {peer:.1f} s, {n_eval[0]} model evaluations, "
-          f"status {sol.status}; updated {np.round(sol.x * scale, 6).tolist()}")
+          f"status {sol.status}; updated {[float(f'{v:.6g}') for v in to_p(sol.x)]}")
     print(f"ratio peer / mvtk: {peer / total:.2f}")
 
 
