@@ -282,3 +282,20 @@ def test_reference_surface_offset_is_invariant():
                                  [lam], fixed_dofs=fixed)
         out.append(modal_analysis(m, 4).fn_hz)
     np.testing.assert_allclose(out[1], out[0], rtol=2e-3)
+
+
+def test_static_tip_moment_constant_curvature_and_sign():
+    """A moment +My at the free end: ry = My L / EI > 0, w = -My L^2 / (2 EI) (the
+    right-hand rotation about +y lifts the +x side down; u = z ry, w,x = -ry)."""
+    L, b, h = 0.5, 0.05, 0.002
+    mat, model = _beam_strip(L, b, h, 20, clamp="x0")
+    tip = model.node_set("x1")
+    trib = np.full(len(tip), b / (len(tip) - 1))
+    trib[[np.argmin(model.nodes[tip, 1]), np.argmax(model.nodes[tip, 1])]] /= 2
+    My = 0.3  # N m total
+    f = np.zeros(model.n_dof)
+    f[[model.dof_index(n, "ry") for n in tip]] = My * trib / b
+    u = model.expand(static_solve(model, f))
+    EI = mat.E * b * h**3 / 12
+    assert u[tip, 4].mean() == pytest.approx(My * L / EI, rel=1e-6)
+    assert u[tip, 2].mean() == pytest.approx(-My * L**2 / (2 * EI), rel=1e-6)
