@@ -200,6 +200,8 @@ def _parse_rate(value: str, key: str, path: Path, line_no: int) -> float:
 
 
 def _decode_head(raw: bytes, encoding: str, path: Path) -> list[str]:
+    if raw.startswith(b"\xef\xbb\xbf"):  # UTF-8 byte-order mark (Excel exports)
+        raw = raw[3:]
     lines = raw.splitlines()
     out = []
     for i, b in enumerate(lines):

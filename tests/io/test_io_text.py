@@ -79,6 +79,12 @@ def test_whitespace_delimited_with_ms_time(tmp_path):
     assert th.quantity.item() == "velocity"
 
 
+def test_utf8_byte_order_mark(tmp_path):
+    raw = b"\xef\xbb\xbf" + b"time [s],a [V]\n0,1\n1,2\n"
+    th = mio.read(_write(tmp_path, "bom.csv", raw))["time_history"]
+    assert list(th.channel.values) == ["a"] and th.attrs["fs"] == 1.0
+
+
 def test_options_override_header(tmp_path):
     text = "0.1,1\n0.2,2\n0.3,3\n"
     th = mio.read(_write(tmp_path, "e.csv", text), fs=10.0, channels=["a", "b"], units=["V", "Pa"])[
