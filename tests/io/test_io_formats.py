@@ -364,3 +364,30 @@ def test_reader_returning_bad_object(tmp_path, monkeypatch):
         FormatError, match=r"reader 'bad' returned list; expected an xarray.Dataset"
     ):
         mio.read(path, format="bad")
+
+
+# ---------------------------------------------------------------- CLI
+
+
+def test_cli_read_subcommand(tmp_path, capsys):
+    import argparse
+
+    from mvtk.io._cli import add_parser
+
+    parser = argparse.ArgumentParser(prog="mvtk")
+    add_parser(parser.add_subparsers(dest="command"))
+    src = tmp_path / "a.csv"
+    src.write_text("time [s],a [V],b [N]\n0,1,2\n0.5,2,3\n1,3,4\n")
+    out = tmp_path / "a.nc"
+    args = parser.parse_args(
+        ["read", str(src), "--set", 'quantity=["other", "force"]', "-o", str(out)]
+    )
+    assert args.func(args) == 0
+    text = capsys.readouterr().out
+    assert "time_history (channel=2, time=3) float64  fs=2 Hz" in text
+    assert "a: other [V]" in text and out.exists()
+    args = parser.parse_args(["read", str(tmp_path / "missing.csv")])
+    assert args.func(args) == 2
+    assert "no such file" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        parser.parse_args(["read", str(src), "--set", "novalue"])

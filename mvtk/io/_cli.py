@@ -1,0 +1,81 @@
+"""``mvtk read``: read a measurement file, print its layout, optionally write netCDF."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+from ..errors import MvtkError
+
+__all__ = ["add_parser", "parse_option", "summary"]
+
+
+def parse_option(text: str) -> tuple[str, object]:
+    """``"key=value"`` -> (key, value); the value is JSON when it parses, else a string."""
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    try:
+        return key, json.loads(value)
+    except json.JSONDecodeError:
+        return key, value
+
+
+def summary(ds) -> str:
+    """A plain-text description of a Dataset returned by ``mvtk.io.read``."""
+    out = [f"{ds.attrs.get('source', '?')} ({ds.attrs.get('format', '?')})"]
+    for name, var in ds.data_vars.items():
+        dims = ", ".join(f"{d}={n}" for d, n in var.sizes.items())
+        line = f"  {name} ({dims}) {var.dtype}"
+        if "fs" in var.attrs:
+            line += f"  fs={var.attrs['fs']:g} Hz"
+        out.append(line)
+        cdim = var.dims[0]
+        if str(name).startswith("time_history"):
+            suffix = cdim[len("channel") :]
+            for k, ch in enumerate(var[cdim].values):
+                q = var["quantity" + suffix].values[k]
+                u = var["units" + suffix].values[k]
+                out.append(f"    {ch}: {q} [{u}]")
+    for key, value in ds.attrs.items():
+        if key not in ("source", "format"):
+            out.append(f"  attr {key} = {value!r}")
+    return "\n".join(out)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from . import read, write
+
+    options = dict(args.set or [])
+    try:
+        ds = read(args.path, format=args.format, **options)
+        print(summary(ds))
+        if args.output:
+            write(ds, args.output)
+            print(f"written: {args.output}")
+    except (MvtkError, FileNotFoundError) as err:
+        print(f"mvtk read: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def add_parser(subparsers) -> None:
+    """Register ``mvtk read PATH [--format F] [--set key=value ...] [--output OUT.nc]``."""
+    p = subparsers.add_parser(
+        "read",
+        help="read a measurement file (CSV, UFF, MAT, HDF5, netCDF, TDMS, WAV) and describe it",
+        description="Read a measurement file with mvtk.io.read, print its layout, and "
+        "optionally write it to netCDF.",
+    )
+    p.add_argument("path", help="measurement file")
+    p.add_argument("--format", default=None, help="force a reader (default: detect)")
+    p.add_argument(
+        "--set",
+        action="append",
+        type=parse_option,
+        metavar="KEY=VALUE",
+        help='reader option, value as JSON or text, e.g. --set units=\'["N", "m/s^2"]\'',
+    )
+    p.add_argument("--output", "-o", default=None, help="write the Dataset to this netCDF file")
+    p.set_defaults(func=_run)
