@@ -159,3 +159,15 @@ def test_validate_spectrum():
     nan["psd"][0, 1] = np.nan
     with pytest.raises(FormatError, match="non-finite spectral values"):
         mio.validate(nan)
+
+
+def test_import_does_not_load_optional_heavy_modules():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, mvtk, mvtk.io; "
+        "print([m for m in ('pyuff', 'matplotlib', 'dask', 'nptdms', 'h5py') if m in sys.modules])"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
