@@ -1,22 +1,34 @@
 """``mvtk update STUDY.toml``: model updating from the ``[updating]`` section of a study.
 
-Study layout read here::
+Study layout read here (the layout of ``data/smart_beam/study.toml`` works as is)::
+
+    [structure]
+    file = "../structures/smart_beam.toml"   # structure TOML, relative to the study
 
     [updating]
-    structure_file = "structures/smart_beam.toml"   # optional, relative to the study
-    # structure_key = "model"     # optional: the description is study["model"]
-    # builder = "package.module:function"   # optional, default mvtk.fe.build_model
-    n_modes = 8                   # optional
-    regularization = 0.0          # optional
-    mac_weight = 0.0              # optional
-    max_iter = 50                 # optional
-    frequency_std = 0.002         # optional, relative std of the measured frequencies
-    parameters = [ { path = "materials.steel.E", lower = 1.5e11, upper = 2.5e11 }, ... ]
-    targets = [ { fn_hz = 13.26 }, { fn_hz = 41.14, kind = "torsion" } ]
+    targets_hz = [13.26, 41.14]              # or: targets = [{fn_hz = 13.26, kind = ...}]
+    max_iter = 30                            # optional
+    # n_modes, regularization, mac_weight, frequency_std: optional solver settings
+    # builder = "package.module:function"    # optional, default mvtk.fe.build_model
 
-Without ``structure_file``/``structure_key`` the structure description is the study
-itself without its ``updating`` table (top-level ``materials``, ``structure``, ...).
-``structure_file`` may also be given at the top level of the study.
+    [[updating.parameters]]
+    path = "materials.steel.E"
+    lower = 150e9
+    upper = 260e9
+
+    [[updating.parameters]]
+    path = "boundary.clamp_stiffness"
+    initial = 2000.0     # a field absent from the structure is created with this value
+    lower = 20.0
+    upper = 1e6
+    log = true           # optional: log-scaled variable
+
+Where the structure description comes from, first match wins: ``updating.structure_file``
+or a top-level ``structure_file`` (relative to the study); ``[structure] file``;
+``updating.structure_key`` (the description is that table of the study); else the study
+itself is the description, without its study-level tables (``updating``, ``study``,
+``measurements``, ``damping``, ``fe``, ``reduction``, ``control``, ``checks``,
+``references``, ``truth``).
 """
 
 from __future__ import annotations
@@ -36,7 +48,30 @@ from ..errors import ConfigError, FormatError
 __all__ = ["add_parser", "load_study", "run_update"]
 
 _KEYS = {"structure_file", "structure_key", "builder", "n_modes", "regularization",
-         "mac_weight", "max_iter", "frequency_std", "parameters", "targets"}
+         "mac_weight", "max_iter", "frequency_std", "parameters", "targets", "targets_hz"}
+#: Tables of a study TOML that are not part of an inline structure description.
+STUDY_TABLES = ("updating", "study", "measurements", "damping", "fe", "reduction", "control",
+                "checks", "references", "truth")
+
+
+def _create_missing(description: dict, path: str, value: Any, where: str) -> None:
+    """Create the field ``path`` (dict keys only) with ``value`` if it does not exist."""
+    node = description
+    parts = path.split(".")
+    for part in parts[:-1]:
+        if isinstance(node, list):
+            try:
+                node = node[int(part)]
+            except (ValueError, IndexError):
+                return  # let Parameter.resolve report the bad path
+            continue
+        if not isinstance(node, dict):
+            return
+        node = node.setdefault(part, {})
+    if isinstance(node, dict) and parts[-1] not in node:
+        if not isinstance(value, int | float) or isinstance(value, bool):
+            raise ConfigError(f"{where}.initial: expected a number, got {value!r}")
+        node[parts[-1]] = float(value)
 
 
 def _read_toml(path: Path, what: str) -> dict:
@@ -93,6 +128,9 @@ def load_study(path: str | Path) -> dict[str, Any]:
             f"{path}: [updating] has unknown keys {sorted(unknown)}; allowed: {sorted(_KEYS)}"
         )
     sfile = up.get("structure_file", study.get("structure_file"))
+    st = study.get("structure")
+    if sfile is None and isinstance(st, Mapping) and "file" in st:
+        sfile = st["file"]
     structure_path = None
     if sfile is not None:
         structure_path = (path.parent / str(sfile)).resolve()
@@ -103,13 +141,28 @@ def load_study(path: str | Path) -> dict[str, Any]:
             raise ConfigError(f"{path}: updating.structure_key = {key!r} names no table")
         description = dict(study[key])
     else:
-        description = {k: v for k, v in study.items() if k not in ("updating",)}
+        description = {k: v for k, v in study.items() if k not in STUDY_TABLES}
     params = up.get("parameters")
     if not isinstance(params, list) or not params:
         raise ConfigError(f"{path}: updating.parameters must be a non-empty list of tables")
-    targets = up.get("targets")
-    if not isinstance(targets, list) or not targets:
-        raise ConfigError(f"{path}: updating.targets must be a non-empty list of tables")
+    for i, p in enumerate(params):
+        if isinstance(p, Mapping) and isinstance(p.get("path"), str) and "initial" in p:
+            _create_missing(description, p["path"], p["initial"],
+                            f"{path}: updating.parameters[{i}]")
+    if ("targets" in up) == ("targets_hz" in up):
+        raise ConfigError(
+            f"{path}: give exactly one of updating.targets (tables) or updating.targets_hz "
+            "(frequencies in Hz)"
+        )
+    if "targets_hz" in up:
+        hz = up["targets_hz"]
+        if not isinstance(hz, list) or not hz:
+            raise ConfigError(f"{path}: updating.targets_hz must be a non-empty list of Hz")
+        targets = [{"fn_hz": f, "label": f"f{i + 1}"} for i, f in enumerate(hz)]
+    else:
+        targets = up["targets"]
+        if not isinstance(targets, list) or not targets:
+            raise ConfigError(f"{path}: updating.targets must be a non-empty list of tables")
     kwargs: dict[str, Any] = {
         "description": description,
         "parameters": [

@@ -82,6 +82,42 @@ def test_cli_structure_key(tmp_path):
     assert load_study(path)["description"] == _start()
 
 
+def test_cli_study_layout_targets_hz_initial_and_extra_tables(tmp_path):
+    start = _start()
+    del start["boundary"]  # the clamp spring is created from `initial`
+    table = _updating_table()
+    table["targets_hz"] = [t["fn_hz"] for t in table.pop("targets")]
+    table["parameters"][1]["initial"] = 4.0
+    study = {**start, "study": {"name": "x"}, "damping": {"fn_hz": [1.0]},
+             "truth": {"materials.steel.E": 2.1e11}, "updating": table}
+    path = tmp_path / "study.toml"
+    path.write_text(tomli_w.dumps(study))
+    kw = load_study(path)
+    assert kw["description"]["boundary"] == {"clamp_stiffness": 4.0}
+    assert not {"study", "damping", "truth", "updating"} & set(kw["description"])
+    assert [t.label for t in kw["targets"]] == ["f1", "f2", "f3"]
+
+
+@pytest.mark.slow
+def test_cli_runs_the_project_study_layout(tmp_path, capsys):
+    """data/smart_beam/study.toml as written by the study stage, on a coarse mesh."""
+    study_file = ROOT / "data" / "smart_beam" / "study.toml"
+    fe = pytest.importorskip("mvtk.fe")
+    if not (study_file.is_file() and SMART_BEAM.is_file() and hasattr(fe, "build_model")):
+        pytest.skip("project study, structure or build_model not available")
+    coarse = tomllib.loads(SMART_BEAM.read_text())
+    coarse["mesh"] = {"element_size": 0.02}
+    (tmp_path / "coarse.toml").write_text(tomli_w.dumps(coarse))
+    text = study_file.read_text()
+    assert 'file = "../structures/smart_beam.toml"' in text
+    (tmp_path / "study.toml").write_text(
+        text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"'))
+    assert main(["update", str(tmp_path / "study.toml"), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert max(abs(r["error_pct"]) for r in res["residuals"]) < 0.5
+    assert set(res["updated_values"]) == {"materials.steel.E", "boundary.clamp_stiffness"}
+
+
 @pytest.mark.parametrize(
     ("study", "match"),
     [
@@ -104,6 +140,12 @@ def test_cli_structure_key(tmp_path):
                        "structure_file": "missing.toml"}}, "structure file not found"),
         ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
                        "structure_key": "model"}}, "structure_key = 'model' names no table"),
+        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
+                       "targets_hz": [1.0]}}, "give exactly one of updating.targets"),
+        ({"updating": {"parameters": [{"path": "a"}], "targets_hz": []}},
+         "updating.targets_hz must be a non-empty list"),
+        ({"updating": {"parameters": [{"path": "x.k", "initial": "big"}],
+                       "targets_hz": [1.0]}}, r"parameters\[0\].initial: expected a number"),
     ],
 )
 def test_cli_study_errors(tmp_path, study, match):
