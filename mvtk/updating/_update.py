@@ -178,11 +178,13 @@ class _Problem:
         t0 = time.perf_counter()
         # shift: eigsh_lowest's default (-1e-6 x median K_ii/M_ii) sits far below the
         # wanted modes when rotational DOFs carry little inertia, and shift-invert then
-        # needs many more iterations; once the lowest eigenvalue is known, shift to
-        # -0.1 of it (K - sigma M stays positive definite)
-        sigma = None
-        if self._lowest is not None and self._lowest > 0:
-            sigma = -0.1 * self._lowest
+        # needs many more iterations. Shift to -0.1 x the lowest eigenvalue (of the
+        # previous solve; the lowest target before the first): negative, so K - sigma M
+        # stays positive definite, and close to the wanted modes
+        lowest = self._lowest
+        if lowest is None:
+            lowest = (TWO_PI * float(self.ft.min())) ** 2
+        sigma = -0.1 * lowest if lowest > 0 else None
         eig = eigsh_lowest(model.K, model.M, n, sigma=sigma)
         if eig.omega2[0] > 0:
             self._lowest = float(eig.omega2[0])
