@@ -184,11 +184,12 @@ def log_decrement(
     out = []
     for name, sig in zip(names, data):
         guess = fn_hz or _fn_guess(sig, fs)
-        if fs / guess < 10:
+        if fs / guess < 8:
             warnings.warn(
                 f"log_decrement: channel {name!r} has only {fs / guess:.2g} samples per period "
                 f"of the {guess:.4g} Hz mode; interpolated peak amplitudes are biased (up to "
-                "about 1 % in zeta): use >= 10 samples per period or envelope_fit",
+                "about 1 % in zeta at 5 samples per period): use >= 8 samples per period or "
+                "envelope_fit",
                 ResolutionWarning, stacklevel=2,
             )
         t, amp = _peaks(sig, fs, guess)

@@ -43,12 +43,14 @@ class HalfPowerResult:
         (``min_lines / (f2 - f1)``, rectangular window). A lower bound when the band
         itself was overestimated by a short record.
     scatter : numpy.ndarray
-        RMS relative scatter of ``|H|`` about the single-mode curve fitted to the lines
-        above ``fit_level`` x peak (NaN with fewer than 6 such lines): a noise measure.
+        RMS relative deviation of ``|H|`` from the single-mode curve fitted to the lines
+        above ``fit_level`` x peak (NaN with fewer than 6 such lines): measures noise,
+        neighbouring modes and a wrong ``kind``/``power`` choice.
     quality : tuple of str
         ``"ok"``, ``"coarse"`` (fewer than ``min_lines`` lines), ``"overlap"`` (a
         neighbouring mode within ``overlap_factor`` bandwidths), ``"noisy"`` (scatter
-        above ``max_scatter``) or ``"failed"``.
+        above ``max_scatter``; the name covers every deviation from one mode) or
+        ``"failed"``.
     kind : tuple of str
         Exact single-mode relation used: receptance, mobility or accelerance.
     df_hz : float
@@ -207,7 +209,9 @@ def _one_mode(f, a, k0, p, search, method, fit_level):
         gpk, upk = y[k] / u[k] ** p, u[k]
     else:
         upk, gpk = m
-        if gpk > y[k] / u[k] ** p:  # interpolated peak cannot be below the top line
+        # an interpolated peak cannot be below the top line (a least-squares fit can:
+        # the top line of a noisy curve is biased high, so "fit" keeps its own peak)
+        if method == "interpolate" and gpk > y[k] / u[k] ** p:
             gpk, upk = y[k] / u[k] ** p, u[k]
     peak = 1 / np.sqrt(gpk)
     level = peak / np.sqrt(2)
@@ -263,7 +267,7 @@ def half_power(
     kind: str = "auto",
     power: bool | None = None,
     method: str = "interpolate",
-    fit_level: float = 0.5,
+    fit_level: float = 0.3,
     min_lines: float = 5.0,
     overlap_factor: float = 5.0,
     max_scatter: float = 0.03,
@@ -426,10 +430,11 @@ def _warn(r: HalfPowerResult, min_lines: float, df: float, max_scatter: float) -
         parts = [f"{r.curve[i]} mode {r.mode[i]} at {r.fn_hz[i]:.4g} Hz: {r.scatter[i]:.1%}"
                  for i in noisy[:6]]
         warnings.warn(
-            f"half_power: |H| scatters by more than {max_scatter:.0%} about a single-mode "
-            "curve near the peak of " + "; ".join(parts) + "; the -3 dB points of a noisy "
-            "curve are biased (a noise spike at the peak narrows the band). Use "
-            "method='fit', more averages, or a time-domain estimator.",
+            f"half_power: |H| deviates by more than {max_scatter:.0%} RMS from a single-mode "
+            "curve near the peak of " + "; ".join(parts) + ". Noise (a spike at the peak "
+            "narrows the band), a neighbouring mode or the wrong FRF kind / power quantity "
+            "bias the -3 dB points. Use method='fit', more averages, a time-domain "
+            "estimator, or check kind/power.",
             AccuracyWarning, stacklevel=3,
         )
     overlap = [i for i, q in enumerate(r.quality) if q == "overlap"]

@@ -8,7 +8,13 @@ from hypothesis import strategies as st
 
 from mvtk import testing as T
 from mvtk.damping import half_power, half_power_zeta
-from mvtk.errors import DimensionError, ModeOverlapWarning, ParameterError, ResolutionWarning
+from mvtk.errors import (
+    AccuracyWarning,
+    DimensionError,
+    ModeOverlapWarning,
+    ParameterError,
+    ResolutionWarning,
+)
 from mvtk.signal import psd
 
 
@@ -37,7 +43,9 @@ def test_wrong_relation_is_biased_for_heavy_damping():
     f = _lines_grid(50.0, 0.05, 20)
     h = T.modal_frf(f, 50.0, 0.05, kind="receptance")
     exact = half_power(h, fn_hz=[50.0])
-    naive = half_power(h, fn_hz=[50.0], kind="mobility")
+    with pytest.warns(AccuracyWarning, match="wrong FRF kind"):  # caught by the scatter
+        naive = half_power(h, fn_hz=[50.0], kind="mobility")
+    assert naive.quality == ("noisy",) and exact.quality == ("ok",)
     assert exact.zeta[0] == pytest.approx(0.05, rel=1e-6)
     assert abs(naive.zeta[0] / 0.05 - 1) > 2e-3
 
@@ -82,11 +90,13 @@ def test_psd_uses_amplitude_not_power(rng):
     assert r.zeta[0] == pytest.approx(0.02, rel=0.05)
     # the classic mistake: the PSD itself at 1/sqrt(2) is the -1.5 dB amplitude point;
     # for a Lorentzian peak the band shrinks by sqrt(sqrt(2) - 1) = 0.644
-    wrong = half_power(p.values[0], p["frequency"].values, fn_hz=[40.0], kind="accelerance")
+    with pytest.warns(AccuracyWarning):
+        wrong = half_power(p.values[0], p["frequency"].values, fn_hz=[40.0], kind="accelerance")
     assert wrong.zeta[0] / r.zeta[0] < 0.8
     f = _lines_grid(40.0, 0.02, 20)
     h = np.abs(T.modal_frf(f, 40.0, 0.02, kind="mobility").values[0, 0])
-    naive = half_power(h**2, f, fn_hz=[40.0], kind="mobility")
+    with pytest.warns(AccuracyWarning, match="power quantity"):
+        naive = half_power(h**2, f, fn_hz=[40.0], kind="mobility")
     right = half_power(h**2, f, fn_hz=[40.0], kind="mobility", power=True)
     assert right.zeta[0] == pytest.approx(0.02, rel=1e-6)
     assert naive.zeta[0] / 0.02 == pytest.approx(np.sqrt(np.sqrt(2) - 1), rel=1e-3)
@@ -232,7 +242,8 @@ def test_cross_check_sdypy_ema_synthetic():
                       frf_type="accelerance")
         m.get_poles(show_progress=False)
         m.select_closest_poles([50.0, 140.0])
-    r = half_power(h, f, fn_hz=[50.0, 140.0])
+    with pytest.warns(AccuracyWarning, match="140.2 Hz"):  # mode 1's residual on mode 2
+        r = half_power(h, f, fn_hz=[50.0, 140.0])
     # single-mode half-power keeps the neighbour's residual (0.13 % on mode 2); LSCF does not
     np.testing.assert_allclose(r.fn_hz, m.nat_freq, rtol=2e-3)
     np.testing.assert_allclose(r.zeta, m.nat_xi, rtol=0.02)
