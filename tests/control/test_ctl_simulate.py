@@ -245,3 +245,23 @@ def test_integrator_failure_is_reported(plant, monkeypatch):
     with pytest.raises(ConvergenceError, match="integration .LSODA. failed: step size"):
         simulate(plant, PPF([(F1, 0.3, 0.5)], u_max=1.0), t_end=0.1, fs_out=100.0,
                  initial=x0, method="LSODA")
+
+
+@pytest.mark.parametrize("n", [1, 2, 63, 64, 65, 130])
+def test_blocked_march_equals_plain_recursion(n):
+    from mvtk.control._simulate import _march
+
+    rng = np.random.default_rng(7)
+    Phi = 0.3 * rng.standard_normal((5, 5))
+    Gam = rng.standard_normal((5, 2))
+    E = rng.standard_normal((n, 2))
+    x0 = rng.standard_normal(5)
+    ref = np.empty((n, 5))
+    ref[0] = x0
+    for k in range(n - 1):
+        ref[k + 1] = Phi @ ref[k] + Gam @ E[k]
+    np.testing.assert_allclose(_march(Phi, Gam, x0, E, n), ref, rtol=1e-12, atol=1e-12)
+    free = ref.copy()
+    for k in range(n - 1):
+        free[k + 1] = Phi @ free[k]
+    np.testing.assert_allclose(_march(Phi, Gam, x0, None, n), free, rtol=1e-12, atol=1e-12)
