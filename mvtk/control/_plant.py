@@ -88,7 +88,8 @@ def _is_dof_spec(spec) -> bool:
 def _named(specs, what: str) -> list[tuple[str | None, object]]:
     if isinstance(specs, Mapping):
         return [(str(k), v) for k, v in specs.items()]
-    if isinstance(specs, np.ndarray) and specs.ndim == 1 or _is_dof_spec(specs):
+    single = (isinstance(specs, np.ndarray) and specs.ndim == 1) or _is_dof_spec(specs)
+    if single or hasattr(specs, "load_vector"):
         specs = [specs]
     try:
         items = list(specs)

@@ -274,6 +274,8 @@ def test_piezo_patch_input_in_volts():
                          form="modal", n_modes=4)
     ss = p.to_state_space()
     assert ss.inputs == ("pzt",) and ss.input_units == ("V",)
+    single = structural_plant(se, patch, (tip, "uz"))  # one spec, not a list
+    assert single.inputs == ("pzt",) and single.outputs == (f"u:n{tip}:uz",)
     x = np.linalg.solve(model.K.toarray(), patch.load_vector(model))
     w_tip = x[model.dof_index(tip, "uz")]
     np.testing.assert_allclose(ss.dc_gain()[0, 0], w_tip, rtol=1e-8)
