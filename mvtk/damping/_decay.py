@@ -52,6 +52,9 @@ class DecayResult:
     method: str
     band_hz: tuple[float, float] | None
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self) -> pd.DataFrame:
         """One row per channel."""
         return pd.DataFrame({

@@ -72,6 +72,9 @@ class HalfPowerResult:
     kind: tuple[str, ...]
     df_hz: float
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self) -> pd.DataFrame:
         """One row per (curve, mode)."""
         return pd.DataFrame({

@@ -72,6 +72,9 @@ class RayleighFit:
             )
         return rayleigh_zeta(f, self.alpha, self.beta)
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self) -> pd.DataFrame:
         """One row per input mode with the fit; alpha and beta in ``attrs``."""
         df = pd.DataFrame({

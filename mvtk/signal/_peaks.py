@@ -42,6 +42,9 @@ class PeakResult:
     def __len__(self) -> int:
         return int(self.fn_hz.size)
 
+    def _repr_html_(self) -> str:
+        return self.to_dataframe()._repr_html_()
+
     def to_dataframe(self) -> pd.DataFrame:
         """One row per peak: ``fn_hz``, ``index``, ``amplitude``, ``prominence_db``."""
         return pd.DataFrame({"fn_hz": self.fn_hz, "index": self.index,

@@ -116,3 +116,9 @@ def test_errors():
         rayleigh_fit([10.0, 20.0], [0.01, 0.02], modes=(0, 0))
     with pytest.raises(ParameterError, match="fn_hz must be finite and > 0"):
         rayleigh_fit([-1.0, 20.0], [0.01, 0.02])
+
+
+def test_results_render_html():
+    r = rayleigh_fit([13.26, 41.14], [5.84e-4, 1.32e-3])
+    html = r._repr_html_()
+    assert "<table" in html and "zeta_fit" in html
