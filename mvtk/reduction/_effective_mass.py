@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..fe import FEModel, eigsh_lowest
-from ._craig_bampton import SuperElement, _translation
+from ._craig_bampton import SuperElement, _translation, craig_bampton
 
 __all__ = ["EffectiveMassTable", "effective_mass"]
 
@@ -97,6 +97,8 @@ def effective_mass(
     model_or_se: FEModel | SuperElement,
     direction: str = "uz",
     n_modes: int = 20,
+    *,
+    base=None,
 ) -> EffectiveMassTable:
     """Effective mass table for a unit base translation in ``direction``.
 
@@ -109,6 +111,12 @@ def effective_mass(
     direction : {"ux", "uy", "uz"}
     n_modes : int
         Number of modes for an FEModel (ignored for a SuperElement, which uses its own).
+    base : optional
+        FEModel only: nodes, node set names or points (as ``retained`` of
+        :func:`craig_bampton`) forming a base that is not among the model's supports
+        (e.g. the clamp of a free-free model). The modes are then the fixed-interface
+        modes with this base held, i.e. ``effective_mass(craig_bampton(model, base,
+        n_modes))``.
 
     Returns
     -------
@@ -126,6 +134,10 @@ def effective_mass(
     model the fractions sum to 1; for fixed-interface modes they sum to less than 1 (the
     rest is the boundary's residual mass).
     """
+    if base is not None:
+        if not isinstance(model_or_se, FEModel):
+            raise ParameterError("base= applies to an FEModel, not to a SuperElement")
+        model_or_se = craig_bampton(model_or_se, base, n_modes)
     if isinstance(model_or_se, SuperElement):
         se = model_or_se
         model = se.model

@@ -72,6 +72,10 @@ def test_fixed_interface_of_free_beam_with_base_boundary():
     assert list(df.columns) == ["mode", "fn_hz", "participation", "effective_mass_kg",
                                 "fraction", "cumulative"]
     assert table.n_below(se.interior_fn_hz[2]) == 3
+    same = effective_mass(model, "uz", n_modes=8, base="clamp")
+    np.testing.assert_allclose(same.effective_mass_kg, table.effective_mass_kg)
+    with pytest.raises(ParameterError, match="base= applies to an FEModel"):
+        effective_mass(se, base="clamp")
 
 
 def test_bad_inputs():
