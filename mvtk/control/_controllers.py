@@ -288,13 +288,8 @@ class _FilterController:
             )
         _check_u_max(self.u_max)
 
-    def realize(
-        self, plant: SecondOrderSystem | StateSpace, design_plant=None
-    ) -> FeedbackLaw:
-        """Connect to ``plant``; gains normalised on ``design_plant`` (default ``plant``)."""
-        ss = plant_state_space(plant)
+    def _bank(self, ss: StateSpace, design_plant) -> tuple[int, _Ctrl, dict]:
         act = _index(ss.inputs, self.actuator, "input")
-        meas = _measurement(ss, self.sensor, self._rate, act)
         k_s = 1.0
         if self.normalise == "static":
             dss = plant_state_space(design_plant) if design_plant is not None else ss
@@ -303,7 +298,29 @@ class _FilterController:
         gains = [g / k_s for _, _, g in self.targets]
         ctrl = _filter_bank(self.targets, gains, self._sign, self._name)
         meta = {"controller": self._name, "static_gain": k_s, "physical_gains": gains}
+        return act, ctrl, meta
+
+    def realize(
+        self, plant: SecondOrderSystem | StateSpace, design_plant=None
+    ) -> FeedbackLaw:
+        """Connect to ``plant``; gains normalised on ``design_plant`` (default ``plant``)."""
+        ss = plant_state_space(plant)
+        act, ctrl, meta = self._bank(ss, design_plant)
+        meas = _measurement(ss, self.sensor, self._rate, act)
         return _linear_law(ss, act, meas, ctrl, self.u_max, repr(self), meta)
+
+    def state_space(self, plant, design_plant=None) -> StateSpace:
+        """The controller alone: input the measured signal (the sensor output, or its rate
+        ``"d(<sensor>)/dt"`` for SRF), output the actuator command (physical gains)."""
+        ss = plant_state_space(plant)
+        act, ctrl, meta = self._bank(ss, design_plant)
+        j = _index(ss.outputs, self.sensor, "output")
+        name, unit = ss.outputs[j], ss.output_units[j]
+        if self._rate:
+            name, unit = f"d({name})/dt", f"{unit}/s" if unit else ""
+        return StateSpace(ctrl.Ac, ctrl.Bc, ctrl.Cc, ctrl.Dc, inputs=[name],
+                          outputs=[ss.inputs[act]], states=list(ctrl.states),
+                          input_units=[unit], output_units=[ss.input_units[act]], meta=meta)
 
 
 @dataclass(frozen=True)

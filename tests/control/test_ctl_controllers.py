@@ -251,3 +251,19 @@ def test_critical_gain_errors():
     with pytest.raises(ParameterError, match="single-filter"):
         critical_gain(sdof(), PPF([(F1, 0.3, 0.1), (2 * F1, 0.3, 0.1)]), g_max=1.0)
     assert critical_gain(sdof(), VelocityFeedback(1e-3), g_max=1.0) == float("inf")
+
+
+def test_filter_controller_state_space_is_the_filter_transfer_function():
+    p = cantilever_modal_plant(3)
+    ff, zf, G = 1.3 * F1, 0.5, 2e-3
+    srf = SRF([(ff, zf, G)], sensor="tip").state_space(p)
+    assert srf.inputs == ("d(tip)/dt",) and srf.outputs == ("patch",)
+    assert srf.input_units == ("m/s",) and srf.output_units == ("V",)
+    g = srf.meta["physical_gains"][0]
+    wf = 2 * np.pi * ff
+    f = np.array([5.0, 13.26, 40.0])
+    s = 2j * np.pi * f
+    expected = -g * wf**2 / (s**2 + 2 * zf * wf * s + wf**2)
+    np.testing.assert_allclose(srf.frequency_response(f)[0, 0], expected, rtol=1e-12)
+    ppf = PPF([(F1, 0.3, 0.5)], sensor="tip").state_space(p)
+    assert ppf.dc_gain()[0, 0] == pytest.approx(0.5 / p.to_state_space().dc_gain()[0, 0])
