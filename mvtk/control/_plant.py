@@ -263,11 +263,15 @@ def structural_plant(
         the plant's mass-normalised eigenmodes (diagonal M = I, K = diag(omega^2), and
         diagonal C for Rayleigh or modal damping).
     n_modes : int, optional
-        Modal form only: number of eigenmodes kept (default: all SE coordinates;
-        required for an FE model).
+        Modal form only: number of eigenmodes kept (default: all SE modes of finite
+        frequency; required for an FE model). Shell super elements have boundary
+        drilling rotations without inertia: their M is singular (the physical form warns)
+        and the highest finite modes can reach 1e7 Hz; keep ``n_modes`` to the band of
+        interest with ``static_correction=True`` for a non-stiff plant.
     static_correction : bool
-        Modal form with truncation: add the residual static flexibility of the dropped
-        modes as a feedthrough ``D`` on displacement outputs, so the DC gain is exact.
+        Modal form with truncation (or massless coordinates): add the residual static
+        flexibility of the dropped modes as a feedthrough ``D`` on displacement outputs,
+        so the DC gain is exact.
     input_units, output_units : sequence of str, optional
         Override the unit strings (defaults: N / N m for DOF inputs, V for actuators,
         m / rad / m/s / rad/s for DOF outputs, empty for vectors).
