@@ -311,3 +311,25 @@ def test_log_parameter_recovers_spring_from_a_decade_off_and_stops_on_match():
                builder=strip_model)
     with pytest.raises(ParameterError, match="freq_tol must be a number >= 0"):
         update(NOMINAL, [E], f.tolist(), builder=strip_model, freq_tol=-1)
+
+
+def test_affine_path_matches_full_rebuilds_with_fewer_builds():
+    f = _truth(4)
+    start = with_values(NOMINAL, {E: 2.1e11 * 1.2, KR: 6.0 * 0.75})
+    params = [Parameter(E, lower=1e11, upper=4e11), Parameter(KR, lower=0.1, upper=100.0)]
+    full = _quiet_update(start, params, f.tolist())
+    aff = _quiet_update(start, params, f.tolist(), affine=True)
+    np.testing.assert_allclose(aff.values, [2.1e11, 6.0], rtol=1e-5)
+    np.testing.assert_allclose(aff.values, full.values, rtol=1e-5)
+    assert aff.meta["affine_check_rel"] < 1e-7
+    assert aff.timing["n_builds"] == 1 + 2 + 1  # base, one per parameter, final check
+    assert full.timing["n_builds"] > aff.timing["n_builds"]
+
+
+def test_affine_path_detects_geometry():
+    f = _truth(3)
+    start = with_values(NOMINAL, {"structure.length": 0.16})
+    with pytest.warns(AccuracyWarning, match="the matrices are not affine in the parameters"):
+        r = update(start, [Parameter("structure.length", lower=0.1, upper=0.3)], f.tolist(),
+                   builder=strip_model, affine=True)
+    assert r.meta["affine_check_rel"] > 1e-4
