@@ -116,7 +116,9 @@ def psd(
     """One-sided power spectral density of every channel by Welch's method.
 
     Wraps :func:`scipy.signal.welch` (same argument names and defaults) on the
-    DESIGN.md time-history conventions.
+    DESIGN.md time-history conventions. For a free decay or another transient analysed
+    for damping, use ``window="boxcar"`` and ``nperseg`` = the record length: the
+    default Hann window underestimates the half-power damping of a decay by about a half.
 
     Parameters
     ----------
