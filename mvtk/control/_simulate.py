@@ -96,7 +96,13 @@ def release_state(
     if not 1 <= int(mode) <= n:
         raise ParameterError(f"mode must be in 1..{n} (1-based), got {mode}")
     j = _index(plant.outputs, output, "output")
-    _, vec = scipy.linalg.eigh(plant.K, plant.M, subset_by_index=[mode - 1, mode - 1])
+    try:
+        _, vec = scipy.linalg.eigh(plant.K, plant.M, subset_by_index=[mode - 1, mode - 1])
+    except np.linalg.LinAlgError as err:
+        raise ParameterError(
+            "release_state needs a symmetric positive definite mass matrix M (a plant with "
+            "massless coordinates: use the modal form of the plant)"
+        ) from err
     phi = vec[:, 0]
     y = plant.Cq[j] @ phi
     if abs(y) < 1e-12 * np.max(np.abs(plant.Cq[j])) * np.max(np.abs(phi)):

@@ -97,3 +97,12 @@ def test_release_state_bad_input():
         release_state(p, 1, "nope")
     with pytest.raises(ParameterError, match="SecondOrderSystem"):
         release_state(p.to_state_space(), 1, "tip")
+
+
+def test_release_state_needs_positive_definite_mass():
+    from mvtk.control import SecondOrderSystem
+
+    p = SecondOrderSystem(np.diag([1.0, 0.0]), np.zeros((2, 2)), np.eye(2), [[1.0], [0.0]],
+                          [[1.0, 0.0]], [[0.0, 0.0]])
+    with pytest.raises(ParameterError, match="positive definite mass"):
+        release_state(p, 1, None)
