@@ -8,7 +8,7 @@ Jacobian (one build + one eigen solve per parameter per iteration), the usual wa
 update a model without eigenvalue sensitivities.
 
 Run:  .venv/bin/python benchmarks/bench_updating.py [--element-size 0.0028] [--n-params 2]
-      [--no-peer]
+      [--difference forward|central] [--affine] [--no-peer]
 """
 
 from __future__ import annotations
@@ -36,6 +36,8 @@ def main() -> None:
     ap.add_argument("--element-size", type=float, default=0.0028, help="m (0.0028: ~20k DOF)")
     ap.add_argument("--n-params", type=int, default=2, choices=(2, 3, 4))
     ap.add_argument("--difference", default="forward", choices=("forward", "central"))
+    ap.add_argument("--affine", action="store_true",
+                    help="assemble once: K(p) = K0 + sum dp dK/dp (moduli, springs)")
     ap.add_argument("--no-peer", action="store_true")
     a = ap.parse_args()
 
@@ -55,13 +57,15 @@ def main() -> None:
     model = build_model(d)
     print(f"model: {model.n_dof} DOF, {model.n_elements} elements "
           f"(first build {time.perf_counter() - t0:.2f} s)")
-    print(f"parameters: {[c[0] for c in chosen]}; matrix differences: {a.difference}")
+    print(f"parameters: {[c[0] for c in chosen]}; matrix differences: {a.difference}; "
+          f"affine: {a.affine}")
 
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         r = update(d, params, targets, builder=build_model, n_modes=6,
-                   regularization=1e-4 if a.n_params > 2 else 0.0, difference=a.difference)
+                   regularization=1e-4 if a.n_params > 2 else 0.0, difference=a.difference,
+                   affine=a.affine)
     total = time.perf_counter() - t0
     for w in caught:
         print(f"  warning {w.category.__name__}: {str(w.message)[:150]}")
