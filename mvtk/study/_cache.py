@@ -3,7 +3,8 @@
 A stage result is a JSON-serialisable dict plus, optionally, an ``xarray.Dataset`` of
 arrays (netCDF). The key is the SHA-256 of the canonical JSON of everything the stage
 depends on (its config section, the keys of the upstream stages, input-file hashes and
-the mvtk version), so changing a controller gain reruns only the control stage.
+the mvtk version and a hash of the source code of the subpackages it uses), so changing a
+controller gain reruns only the control stage.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["stage_key", "StageCache", "to_jsonable"]
+__all__ = ["stage_key", "code_hash", "StageCache", "to_jsonable"]
 
 
 def to_jsonable(obj: Any) -> Any:
@@ -36,6 +37,30 @@ def to_jsonable(obj: Any) -> Any:
     if isinstance(obj, Path):
         return str(obj)
     return obj
+
+
+def code_hash(*subpackages: str) -> str:
+    """SHA-256 (first 16 hex) of the source of mvtk subpackages or modules.
+
+    ``subpackages`` are paths relative to the ``mvtk`` folder: ``"fe"`` (every ``.py``
+    below it) or ``"study/_stages.py"`` (one file).
+
+    Part of every stage key, so that editing the code of a stage (in a development
+    install) invalidates its cached results, not only a version bump.
+    """
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for sub in sorted(subpackages):
+        base = root / sub
+        if base.is_dir():
+            files = sorted(base.rglob("*.py"))
+        else:
+            files = [base if sub.endswith(".py") else root / f"{sub}.py"]
+        for f in files:
+            if f.is_file():
+                h.update(str(f.relative_to(root)).encode())
+                h.update(f.read_bytes())
+    return h.hexdigest()[:16]
 
 
 def stage_key(*parts: Any) -> str:

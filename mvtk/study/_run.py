@@ -11,10 +11,20 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError
-from ._cache import StageCache, stage_key
+from ._cache import StageCache, code_hash, stage_key
 from ._config import Study, load_study
 
 __all__ = ["StudyResult", "run", "STAGES"]
+
+#: Subpackages whose source is part of each stage's cache key.
+_CODE = {
+    "ingest": ("io", "study/_stages.py"),
+    "fe": ("fe", "reduction", "study/_stages.py"),
+    "damping": ("signal", "damping", "study/_stages.py"),
+    "updating": ("fe", "updating", "study/_stages.py"),
+    "reduction": ("fe", "reduction", "control", "study/_stages.py"),
+    "control": ("control", "study/_stages.py"),
+}
 
 #: Stage names in execution order.
 STAGES = ("ingest", "fe", "damping", "updating", "reduction", "control", "report")
@@ -153,7 +163,8 @@ def run(
             if missing:
                 unavailable[name] = f"needs the stage(s) {missing}, which did not complete"
                 return
-            key = stage_key(name, version, key_parts, [keys[n] for n in needs])
+            key = stage_key(name, version, code_hash(*_CODE[name]), key_parts,
+                            [keys[n] for n in needs])
             try:
                 res, ds = cache.get(name, key, compute)
             except ImportError as err:

@@ -105,3 +105,12 @@ def test_stage_cache_hits_only_with_same_key(tmp_path):
     off = StageCache(tmp_path, enabled=False)
     off.get("stage", "k2", compute)
     assert len(calls) == 3
+
+
+def test_code_hash_follows_the_source(tmp_path, monkeypatch):
+    from mvtk.study import _cache
+
+    a = _cache.code_hash("study/_stages.py")
+    assert a == _cache.code_hash("study/_stages.py")
+    assert a != _cache.code_hash("study/_config.py")
+    assert _cache.code_hash("fe") != _cache.code_hash("fe", "study/_stages.py")
