@@ -267,3 +267,17 @@ def test_filter_controller_state_space_is_the_filter_transfer_function():
     np.testing.assert_allclose(srf.frequency_response(f)[0, 0], expected, rtol=1e-12)
     ppf = PPF([(F1, 0.3, 0.5)], sensor="tip").state_space(p)
     assert ppf.dc_gain()[0, 0] == pytest.approx(0.5 / p.to_state_space().dc_gain()[0, 0])
+
+
+def test_closed_loop_poles_match_python_control_feedback():
+    """Our interconnection vs python-control's feedback() of the plant (actuator -> sensor)
+    and the controller's own state space (positive feedback)."""
+    control = pytest.importorskip("control")
+    p = cantilever_modal_plant(3)
+    ss = p.to_state_space()
+    ctrl = PPF([(F1, 0.4, 0.3), (60.0, 0.3, 0.1)], sensor="tip")
+    P = control.ss(ss.A, ss.B[:, [0]], ss.C[[0]], ss.D[[0]][:, [0]])
+    K = ctrl.state_space(p).to_control()
+    ref = np.sort_complex(control.feedback(P, K, sign=1).poles())
+    ours = np.sort_complex(closed_loop(p, ctrl).poles())
+    np.testing.assert_allclose(ours, ref, rtol=1e-9)
