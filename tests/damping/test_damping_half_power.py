@@ -227,6 +227,7 @@ def test_free_free_beam_resolution_warning(shared_data, point):
     np.testing.assert_allclose(r.peak_hz, [52, 142, 279, 460, 687, 959], atol=1.0)
 
 
+@pytest.mark.slow  # importing sdypy (matplotlib, pyuff) takes seconds
 @pytest.mark.shared_data
 def test_cross_check_sdypy_ema(shared_data):
     ema = pytest.importorskip("sdypy.EMA", reason="peer sdypy-EMA not installed")
