@@ -40,6 +40,15 @@ def as_time_history(x, *, name: str = "x") -> xr.DataArray:
         raise FormatError(f"{name}: the 'time' coordinate (s) is missing; fs is derived from it")
     if not np.issubdtype(x.dtype, np.number) or np.iscomplexobj(x.values[:, :0]):
         raise FormatError(f"{name}: expected real numeric samples, found dtype {x.dtype}")
+    finite = np.isfinite(x.values).all(axis=-1)
+    if not finite.all():
+        bad = [str(c) for c, ok in zip(x["channel"].values, finite) if not ok]
+        counts = [int(np.count_nonzero(~np.isfinite(x.values[i])))
+                  for i in np.flatnonzero(~finite)]
+        raise FormatError(
+            f"{name}: channel(s) {bad} hold {counts} missing or non-finite samples (NaN/inf); "
+            "spectra and decay fits need complete records: cut or fill them first"
+        )
     return x
 
 

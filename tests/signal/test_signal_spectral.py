@@ -172,6 +172,10 @@ def test_input_errors(random_test):
         psd(xr.Dataset({"x": random_test}))
     with pytest.raises(ParameterError, match="expected an xarray.DataArray"):
         psd(np.zeros((2, 100)))
+    vals = random_test.values.copy()
+    vals[1, 100:103] = np.nan
+    with pytest.raises(FormatError, match=r"channel\(s\) \['response'\] hold \[3\] missing"):
+        frf(random_test.copy(data=vals), "force")
     t = random_test["time"].values.copy()
     t[50] += 1e-3
     with pytest.raises(FormatError, match="not uniformly sampled"):
