@@ -203,7 +203,7 @@ class _Problem:
         dK, dM = [], []
         for j in np.flatnonzero(self.free):
             p = self.params[j]
-            h = self.rel_step * self.scale[j]
+            h = 0.5 * self.scale[j]
             if v0[j] + h > p.upper:
                 h = -h
             pert = self.build(with_values(desc0, {p.path: float(v0[j] + h)}))
@@ -679,7 +679,7 @@ def update(
     mode_classifier: Callable[[FEModel, np.ndarray], Sequence[str]] | None = None,
     frequency_std: float | None = None,
     identifiability_tol: float = 1e-3,
-    rel_step: float = 1e-6,
+    rel_step: float | None = None,
     difference: str = "central",
     freq_tol: float = 1e-7,
     affine: bool = False,
@@ -738,8 +738,11 @@ def update(
         Smallest accepted ratio ``s_min / s_max`` of the singular values of the
         weighted frequency Jacobian (scaled variables); below it an
         :class:`~mvtk.errors.IdentifiabilityWarning` is issued.
-    rel_step : float
-        Finite-difference step relative to each parameter's scale.
+    rel_step : float, optional
+        Finite-difference step relative to each parameter's scale (default 1e-4 for
+        central, 1e-6 for forward differences; with ``affine=True`` a step of half the
+        scale is used, exact for affine matrices and free of cancellation where a
+        small spring sits on a large stiffness entry).
     difference : {"central", "forward"}
         Scheme for dK/dp, dM/dp: central (two builds per free parameter per
         iteration, accurate for geometry) or forward (one build; exact for parameters
@@ -799,6 +802,10 @@ def update(
     ):
         raise ParameterError(f"frequency_std must be a positive number, got {frequency_std!r}")
     check_difference(difference)
+    if rel_step is None:
+        rel_step = 1e-4 if difference == "central" else 1e-6
+    if not (isinstance(rel_step, int | float) and 0 < rel_step < 1):
+        raise ParameterError(f"rel_step must be in (0, 1), got {rel_step!r}")
     if builder is None:
         builder = _default_builder()
     prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),

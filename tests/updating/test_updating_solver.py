@@ -282,6 +282,8 @@ def test_update_bad_inputs():
         (([E], f), {"regularization": -1.0}, ParameterError, "regularization must be"),
         (([E], f), {"max_iter": 0}, ParameterError, "max_iter must be a positive integer"),
         (([E], f), {"frequency_std": 0.0}, ParameterError, "frequency_std must be a positive"),
+        (([E], f), {"rel_step": 2.0}, ParameterError, r"rel_step must be in \(0, 1\)"),
+        (([E], f), {"difference": "x"}, ParameterError, "difference must be 'central'"),
         ((["materials.alu.E"], f), {}, ConfigError, "no key 'alu' under materials"),
     ]
     for args, extra, exc, match in cases:
