@@ -199,36 +199,50 @@ def _march(Phi: np.ndarray, Gam: np.ndarray, x0: np.ndarray, E: np.ndarray | Non
            block: int = 64):
     """x[k+1] = Phi x[k] + Gam e[k] for k < n - 1 (rows are samples).
 
-    Advanced in blocks of ``block`` samples with the powers ``Phi^j`` and the Markov
-    parameters ``Phi^j Gam`` (a lower-triangular Toeplitz product for the forced part),
-    so that the Python loop runs n / block times.
+    Blocked: with the powers ``Phi^j`` and Markov parameters ``Phi^j Gam`` of one block,
+    (1) the forced response of every block from rest is one matrix product (a
+    lower-triangular Toeplitz operator times all input blocks), (2) the block start
+    states follow from a short recursion with ``Phi^block``, (3) every state is one more
+    matrix product of the powers with the start states. Same result as the plain
+    recursion (round-off), without a Python loop per sample.
     """
     N = x0.size
-    block = max(1, min(block, n))
+    X = np.empty((n, N))
+    X[0] = x0
+    steps = n - 1
+    if steps == 0:
+        return X
+    if E is not None:  # keep the Toeplitz operator (block^2 N ne values) below ~4e6
+        block = min(block, int(np.sqrt(4e6 / (N * max(E.shape[1], 1)))))
+    block = max(1, min(block, steps))
+    nb = -(-steps // block)
     pows = np.empty((block + 1, N, N))  # Phi^0 .. Phi^block
     pows[0] = np.eye(N)
     for j in range(block):
         pows[j + 1] = Phi @ pows[j]
-    X = np.empty((n, N))
-    X[0] = x0
+    P = pows[1:].reshape(block * N, N)  # rows j*N..: Phi^(j+1)
+    F = None
     if E is not None:
         ne = E.shape[1]
         markov = pows[:block] @ Gam  # (block, N, ne): Phi^m Gam
-        # T[j, :, i, :] = Phi^(j - i) Gam for i <= j  (state j + 1 of the block)
-        T = np.zeros((block, N, block, ne))
+        T = np.zeros((block, N, block, ne))  # T[j, :, i] = Phi^(j - i) Gam, i <= j
         for j in range(block):
             T[j, :, : j + 1, :] = markov[j::-1].transpose(1, 0, 2)
-        T = T.reshape(block * N, block * ne)
-    P = pows[1:].reshape(block * N, N)  # rows: Phi^(j+1), j = 0..block-1
-    k = 0
-    while k < n - 1:
-        m = min(block, n - 1 - k)
-        nxt = (P[: m * N] @ X[k]).reshape(m, N)
-        if E is not None:
-            eb = E[k: k + m].reshape(-1)
-            nxt += (T[: m * N, : m * ne] @ eb).reshape(m, N)
-        X[k + 1: k + 1 + m] = nxt
-        k += m
+        Epad = np.zeros((nb * block, ne))
+        Epad[:steps] = E[:steps]
+        F = T.reshape(block * N, block * ne) @ Epad.reshape(nb, block * ne).T  # (block N, nb)
+    starts = np.empty((N, nb))
+    starts[:, 0] = x0
+    PhiB = pows[block]
+    for b in range(nb - 1):
+        nxt = PhiB @ starts[:, b]
+        if F is not None:
+            nxt = nxt + F[(block - 1) * N:, b]
+        starts[:, b + 1] = nxt
+    Y = P @ starts
+    if F is not None:
+        Y += F
+    X[1:] = Y.reshape(block, N, nb).transpose(2, 0, 1).reshape(nb * block, N)[:steps]
     return X
 
 
