@@ -14,11 +14,11 @@ with ``A = sum Qbar_k (z_k+1 - z_k)``, ``B = 1/2 sum Qbar_k (z_k+1^2 - z_k^2)``,
 
 Shear correction: ``k_s = 5/6`` (Reissner/Mindlin value, exact in energy for a
 homogeneous section) is applied to the integrated transverse shear stiffness of every
-stack, homogeneous or layered. For layered stacks this is the usual engineering choice
-(e.g. ANSYS SHELL281 and Abaqus S8R default to it unless told otherwise); an
-equilibrium-based per-laminate factor (Whitney 1973; Vlachoutsis 1992) would differ by a
-few percent in H and changes low bending frequencies of thin plates by far less than
-0.1 %. Pass ``shear_correction`` to use another value.
+stack, homogeneous or layered. For layered stacks this is the usual engineering
+simplification; an equilibrium-based per-laminate factor (Whitney 1973; Vlachoutsis 1992)
+changes H by a few percent, which matters for thick or strongly heterogeneous stacks
+only (for thin plates the shear energy of the low modes is negligible). Pass
+``shear_correction`` to use another value.
 
 Inertia per unit area: ``I0 = sum rho_k dz``, ``I1 = sum rho_k d(z^2)/2``,
 ``I2 = sum rho_k d(z^3)/3`` (kg/m^2, kg/m, kg).
