@@ -4,9 +4,13 @@ Linear loops are advanced by the exact zero-order-hold discretisation of the clo
 (matrix exponential of the augmented matrix ``[[A, B], [0, 0]] dt``, as in
 ``scipy.signal.cont2discrete(method="zoh")``): exogenous inputs (disturbance, sensor
 noise) are held constant between output samples, and the result is exact for such
-inputs. Saturated and switching laws are integrated with :func:`scipy.integrate.solve_ivp`
-(LSODA by default, analytic Jacobian) on the continuous law; the switching law is smoothed
-by its boundary layer, the clip at the actuator limit is applied exactly.
+inputs. Saturated and switching laws run by default as a digital controller
+(``method="sampled"``: the command is computed from the state at the control rate, 10 kHz
+by default, and held while the plant advances exactly; the in-layer loop of the switching
+law is checked for sampled stability), or with :func:`scipy.integrate.solve_ivp` on the
+continuous law (``method="LSODA"``, ``"Radau"``, ``"BDF"`` with the analytic Jacobian;
+accurate but slow on stiff many-mode plants). The switching law is always smoothed by its
+boundary layer; the clip at the actuator limit is applied exactly.
 """
 
 from __future__ import annotations
