@@ -20,6 +20,11 @@ All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example
     nu12 = 0.3
     rho = 1600
 
+    [materials.epoxy]
+    E = 3.546e9
+    nu = 0.35
+    rho = 1180
+
     [materials.pic151]                    # piezo: E, nu, rho, d31 (m/V)
     E = 66.667e9
     nu = 0.34

@@ -158,3 +158,17 @@ def test_beam_structure_type_delegates_to_cantilever_beam():
     s["boundary"]["clamp"] = "y0"
     with pytest.raises(ConfigError, match="boundary.clamp: expected x0, x1 or free"):
         build_model(s)
+
+
+def test_documented_schema_example_builds():
+    import tomllib
+
+    import mvtk.fe._structure as st
+
+    doc = st.__doc__
+    block = doc.split("A complete example::")[1].split("A ``type")[0]
+    example = tomllib.loads("\n".join(line[4:] for line in block.splitlines()))
+    model = build_model(example)
+    res = modal_analysis(model, 2)
+    assert res.mode_type == ("bending", "torsion")
+    assert len(model.node_set("patch:pzt:x1")) > 1
