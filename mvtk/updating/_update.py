@@ -866,6 +866,7 @@ def update(
             IdentifiabilityWarning, stacklevel=2,
         )
     # covariance (scaled variables) -> physical units
+    std_note = None
     A = J.T @ J
     if frequency_std is not None:
         sig = np.concatenate([(w * frequency_std) ** 2, np.zeros(len(prob.mac_rows))])
@@ -874,6 +875,10 @@ def update(
         sig = np.full(n_data, float(r @ r) / (n_data - n_free))
     else:
         sig = np.full(n_data, np.nan)
+        std_note = (
+            f"std not estimated: {n_data} residuals for {n_free} free parameters leave no "
+            "degree of freedom for the residual variance; give frequency_std"
+        )
     Ainv = np.linalg.pinv(A)
     cov_x = Ainv @ (Jd.T * sig) @ Jd @ Ainv
     sc = prob.dp_dx(x)
@@ -955,5 +960,6 @@ def update(
         cost=float(0.5 * st.residual @ st.residual),
         timing=dict(prob.timing),
         meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
-              "least_squares_status": status, "affine_check_rel": affine_dev},
+              "least_squares_status": status, "affine_check_rel": affine_dev,
+              "std_note": std_note},
     )

@@ -198,3 +198,5 @@ def test_smart_beam_reaches_measured_frequencies():
     un = r.unpaired_table()
     assert un["kind"].iloc[0] == "bending" and 60 < un["fn_hz"].iloc[0] < 100
     assert r.parameter_table().loc["boundary.clamp_stiffness", "change_pct"] < -50
+    # two targets, two parameters: no residual degree of freedom for the std
+    assert np.isnan(r.std).all() and "give frequency_std" in r.meta["std_note"]
