@@ -595,7 +595,7 @@ def _read_block(path, lines, start, delim, dec, n_fields):
     remaining = max(os.path.getsize(path) - head_bytes, 0)
     cap = int(remaining / avg * 1.05) + 64
     block = np.empty((n_fields, cap), dtype=np.float64)
-    chunk_rows = max(1000, 4_000_000 // n_fields)
+    chunk_rows = 250_000
     n_rows, has_nan = 0, False
     try:
         reader = pd.read_csv(
@@ -614,15 +614,16 @@ def _read_block(path, lines, start, delim, dec, n_fields):
             for chunk in reader:
                 if chunk.shape[1] != n_fields:
                     return None, 0, False
-                values = chunk.to_numpy(dtype=np.float64)
-                m = values.shape[0]
+                m = chunk.shape[0]
                 if n_rows + m > cap:
                     cap = int((n_rows + m) * 1.25) + 64
                     grown = np.empty((n_fields, cap), dtype=np.float64)
                     grown[:, :n_rows] = block[:, :n_rows]
                     block = grown
-                block[:, n_rows : n_rows + m] = values.T
-                has_nan = has_nan or bool(np.isnan(values).any())
+                for j in range(n_fields):
+                    column = chunk.iloc[:, j].to_numpy(dtype=np.float64)
+                    block[j, n_rows : n_rows + m] = column
+                    has_nan = has_nan or bool(np.isnan(column).any())
                 n_rows += m
     except (ValueError, TypeError, pd.errors.ParserError):
         return None, 0, False
