@@ -63,3 +63,18 @@ def test_free_free_chain_finds_rigid_body_mode():
     exact = 2 * np.sqrt(k) * np.sin(j * np.pi / (2 * n))  # free-free chain
     assert abs(sol.omega2[0]) < 1e-8 * exact[1] ** 2
     np.testing.assert_allclose(np.sqrt(np.abs(sol.omega2[1:])), exact[1:], rtol=1e-8)
+
+
+def test_statespace_static_gain_and_roundtrip():
+    from mvtk.control import StateSpace
+
+    g = StateSpace(np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((2, 0)), [[2.0], [3.0]])
+    assert (g.n_states, g.n_inputs, g.n_outputs) == (0, 1, 2)
+    np.testing.assert_allclose(g.dc_gain(), [[2.0], [3.0]])
+    np.testing.assert_allclose(g.frequency_response([1.0])[:, :, 0], [[2.0], [3.0]])
+    sdof = StateSpace([[0, 1], [-100.0, -0.2]], [[0], [1]], [[1, 0]], inputs=["f"])
+    np.testing.assert_allclose(sdof.dc_gain(), [[0.01]])
+    back = StateSpace.from_scipy(sdof.to_scipy())
+    np.testing.assert_allclose(back.A, sdof.A)
+    with pytest.raises(DimensionError, match="C must have 2 columns"):
+        StateSpace(sdof.A, sdof.B, [[1, 0, 0]])

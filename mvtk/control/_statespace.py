@@ -56,20 +56,29 @@ class StateSpace:
     meta: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        A = np.atleast_2d(np.asarray(self.A, dtype=float))
+        A = np.asarray(self.A, dtype=float)
+        A = A.reshape(0, 0) if A.size == 0 else np.atleast_2d(A)
         n = A.shape[0]
         if A.shape != (n, n):
             raise DimensionError(f"A must be square, got {A.shape}")
-        B = np.asarray(self.B, dtype=float).reshape(n, -1) if n else np.zeros((0, 0))
-        C = np.asarray(self.C, dtype=float)
-        C = C.reshape(-1, n) if C.ndim < 2 else C
-        if C.shape[1] != n:
-            raise DimensionError(f"C must have {n} columns, got {C.shape}")
-        m, p = B.shape[1], C.shape[0]
-        D = np.zeros((p, m)) if self.D is None else np.asarray(self.D, dtype=float)
-        D = D.reshape(p, m) if D.size == p * m else D
-        if D.shape != (p, m):
-            raise DimensionError(f"D must have shape ({p}, {m}), got {D.shape}")
+        if n == 0:
+            # a static gain: the sizes come from D
+            if self.D is None:
+                raise DimensionError("a system without states needs D to fix its sizes")
+            D = np.atleast_2d(np.asarray(self.D, dtype=float))
+            p, m = D.shape
+            B, C = np.zeros((0, m)), np.zeros((p, 0))
+        else:
+            B = np.asarray(self.B, dtype=float).reshape(n, -1)
+            C = np.asarray(self.C, dtype=float)
+            C = C.reshape(-1, n) if C.ndim < 2 else C
+            if C.shape[1] != n:
+                raise DimensionError(f"C must have {n} columns, got {C.shape}")
+            m, p = B.shape[1], C.shape[0]
+            D = np.zeros((p, m)) if self.D is None else np.asarray(self.D, dtype=float)
+            D = D.reshape(p, m) if D.size == p * m else D
+            if D.shape != (p, m):
+                raise DimensionError(f"D must have shape ({p}, {m}), got {D.shape}")
         object.__setattr__(self, "A", A)
         object.__setattr__(self, "B", B)
         object.__setattr__(self, "C", C)
@@ -114,6 +123,8 @@ class StateSpace:
 
     def dc_gain(self) -> np.ndarray:
         """Static gain ``D - C A^-1 B``, shape (p, m)."""
+        if self.n_states == 0:
+            return self.D.copy()
         return self.D - self.C @ np.linalg.solve(self.A, self.B)
 
     # ------------------------------------------------------------ conversions
