@@ -107,7 +107,7 @@ def test_stage_cache_hits_only_with_same_key(tmp_path):
     assert len(calls) == 3
 
 
-def test_code_hash_follows_the_source(tmp_path, monkeypatch):
+def test_code_hash_follows_the_source():
     from mvtk.study import _cache
 
     a = _cache.code_hash("study/_stages.py")
