@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from mvtk.errors import ParameterError
 from mvtk.fe import IsotropicMaterial, Laminate, OrthotropicMaterial, Ply
@@ -81,3 +83,27 @@ def test_bad_inputs():
         Laminate((STEEL,))
     with pytest.raises(ParameterError, match="shear_correction"):
         Laminate((Ply(STEEL, 1e-3),), shear_correction=0.0)
+
+
+def _random_plies(draw_angles, draw_t):
+    return [Ply(CFRP, t, a) for a, t in zip(draw_angles, draw_t)]
+
+
+_angles = st.lists(st.sampled_from([0.0, 30.0, 45.0, -45.0, 90.0, 15.0]), min_size=1,
+                   max_size=4)
+
+
+@settings(max_examples=40, deadline=None)
+@given(_angles, st.floats(1e-4, 2e-3))
+def test_property_symmetric_stacks_uncoupled_and_abd_positive(angles, t):
+    sym = Laminate(tuple(_random_plies(angles + angles[::-1], [t] * (2 * len(angles)))))
+    scale = np.abs(sym.A).max() * sym.thickness
+    np.testing.assert_allclose(sym.B, 0.0, atol=1e-12 * scale)
+    # any stack: ABD positive definite (strain energy > 0), H positive definite
+    lam = Laminate(tuple(_random_plies(angles, [t] * len(angles))), z_bottom=-t / 3)
+    S = np.diag(1 / np.sqrt(np.diag(lam.ABD)))
+    assert np.linalg.eigvalsh(S @ lam.ABD @ S).min() > 0
+    assert np.linalg.eigvalsh(lam.H).min() > 0
+    # rotating every ply by 180 degrees changes nothing
+    rot = Laminate(tuple(Ply(CFRP, t, a + 180.0) for a in angles), z_bottom=-t / 3)
+    np.testing.assert_allclose(rot.ABD, lam.ABD, rtol=1e-10, atol=1e-9 * np.abs(lam.ABD).max())
