@@ -129,6 +129,7 @@ class _Problem:
         self.timing = {"build_s": 0.0, "eigen_s": 0.0, "sensitivity_s": 0.0,
                        "n_builds": 0, "n_eigen": 0, "n_jacobians": 0}
         self.fd_params: set[str] = set()
+        self.one_sided: set[str] = set()
         self._cache: _State | None = None
         self._lowest: float | None = None
 
@@ -341,9 +342,19 @@ class _Problem:
             built = [self.build(with_values(base_desc, {p.path: float(base_vals[j] + s)}))
                      for s in steps]
             pert = built[0]
-            if all(same_dofs(st.model, b) for b in built):
+            same = [same_dofs(st.model, b) for b in built]
+            if all(same):
                 dK, dM = matrix_derivative(st.model, built, h)
                 dw2[:, k] = d_omega2(w2, phi, dK, dM)
+            elif any(same):
+                # a mesh that conforms to the moved field (e.g. a patch edge) changed on
+                # one side only: one-sided difference on the side that kept the mesh
+                self.one_sided.add(p.path)
+                i_same = same.index(True)
+                pert, hs = built[i_same], steps[i_same]
+                dK, dM = matrix_derivative(st.model, [pert], hs)
+                dw2[:, k] = d_omega2(w2, phi, dK, dM)
+                h = hs
             else:
                 # the mesh changed: finite differences of the eigenvalues, modes tracked
                 # by index (documented limitation)
@@ -703,8 +714,11 @@ def update(
     ``dK/dp``, ``dM/dp`` finite differences of the assembled matrices (two extra builds
     per free parameter per iteration, one with ``difference="forward"``). MAC
     derivatives (only with ``mac_weight > 0``) use one extra eigen solve per parameter.
-    If a perturbed build changes the DOF map, that parameter falls back to finite
-    differences of the eigenvalues (modes tracked by index).
+    If a perturbed build changes the DOF map (a mesh that conforms to a moved patch
+    edge), the matrix difference is taken one-sided on the side that kept the mesh
+    (``meta["one_sided_parameters"]``); if both sides changed it, that parameter falls
+    back to finite differences of the eigenvalues, modes tracked by index
+    (``meta["fd_eigen_parameters"]``).
 
     Parameters
     ----------
@@ -960,6 +974,7 @@ def update(
         cost=float(0.5 * st.residual @ st.residual),
         timing=dict(prob.timing),
         meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
+              "one_sided_parameters": sorted(prob.one_sided),
               "least_squares_status": status, "affine_check_rel": affine_dev,
               "std_note": std_note},
     )
