@@ -249,7 +249,7 @@ def _read_complex_column(path: Path, lines: list[str], df_hz, channels, units) -
     return [da]
 
 
-def _diagnose(path: Path, start: int, delim, decimal: str, names: list[str], encoding: str):
+def _diagnose(path: Path, start: int, delim, decimal: str, names: list[str], trailing: bool):
     """Slow scan that names the first bad line; returns per-column counts of NA tokens."""
     n_fields = len(names)
     na_counts = np.zeros(n_fields, dtype=np.int64)
@@ -261,6 +261,8 @@ def _diagnose(path: Path, start: int, delim, decimal: str, names: list[str], enc
             if not line.strip():
                 continue
             fields = _split(line, delim)
+            if trailing and len(fields) == n_fields + 1 and fields[-1] == "":
+                fields = fields[:-1]
             if len(fields) != n_fields:
                 raise FormatError(
                     f"{path}, line {line_no}: {len(fields)} fields; expected {n_fields} "
@@ -385,14 +387,24 @@ def read_text(
     dec = det_decimal if decimal is None else decimal
     if delimiter is not None or decimal is not None:
         n_fields = _numeric_fields(lines[start], delim, dec) or n_fields
+    data_head = [ln.rstrip("\r\n ") for ln in lines[start : start + 20] if ln.strip()]
+    trailing = delim is not None and n_fields > 1 and all(ln.endswith(delim) for ln in data_head)
+    if trailing:  # every line ends with the delimiter: an empty last column, dropped
+        n_fields -= 1
+
+    def fields_of(line: str) -> list[str]:
+        out = _split(line, delim)
+        if trailing and len(out) > 1 and out[-1] == "":
+            out = out[:-1]
+        return out
 
     # header: metadata lines, column names, units row
     header = [(i, ln) for i, ln in enumerate(lines[:start]) if ln.strip()]
     names_line = units_line = None
     table = [h for h in header if (_metadata(h[1], delim) or ("",))[0] not in _CHANNEL_KEYS]
-    if table and len(_split(table[-1][1], delim)) == n_fields:
-        last = _split(table[-1][1], delim)
-        prev = _split(table[-2][1], delim) if len(table) > 1 else None
+    if table and len(fields_of(table[-1][1])) == n_fields:
+        last = fields_of(table[-1][1])
+        prev = fields_of(table[-2][1]) if len(table) > 1 else None
         if prev is not None and len(prev) == n_fields and _looks_like_units(last):
             names_line, units_line = table[-2], table[-1]
         else:
@@ -417,11 +429,11 @@ def read_text(
                 )
             header_fs = rate
         if key in _CHANNEL_KEYS:
-            per_channel[_CHANNEL_KEYS[key]] = _split(value, delim if delim else None)
+            per_channel[_CHANNEL_KEYS[key]] = fields_of(value)
         attrs[f"header_{key}" if key in ("fs", "t0_s", "source", "format") else key] = value
 
     if names_line is not None:
-        raw_names = _split(names_line[1], delim)
+        raw_names = fields_of(names_line[1])
         header_line_no = names_line[0] + 1
     elif channels is not None:
         raw_names = None
@@ -438,7 +450,7 @@ def read_text(
             names.append(name)
             col_units.append(unit)
     if units_line is not None:
-        row = [u.strip().strip("[]()") for u in _split(units_line[1], delim)]
+        row = [u.strip().strip("[]()") for u in fields_of(units_line[1])]
         col_units = [u or c for u, c in zip(row, col_units)]
 
     # time column
@@ -516,9 +528,9 @@ def read_text(
 
     # numeric block: pandas C parser, chunk by chunk into one preallocated array
     all_names = names if names else [f"column {k + 1}" for k in range(n_fields)]
-    block, n_rows, has_nan = _read_block(path, lines, start, delim, dec, n_fields)
+    block, n_rows, has_nan = _read_block(path, lines, start, delim, dec, n_fields, trailing)
     if block is None:
-        _diagnose(path, start, delim, dec, all_names, encoding)
+        _diagnose(path, start, delim, dec, all_names, trailing)
         raise FormatError(
             f"{path}: data block could not be parsed; expected {n_fields} numeric columns"
         )
@@ -527,7 +539,7 @@ def read_text(
     arr = block[:, :n_rows]
     n_missing = np.zeros(n_fields, dtype=np.int64)
     if has_nan:
-        n_missing = _diagnose(path, start, delim, dec, all_names, encoding)
+        n_missing = _diagnose(path, start, delim, dec, all_names, trailing)
     t_first_line = start + 1
     if tcol is not None:
         tname, tunit = names[tcol], (col_units[tcol] if col_units else None) or "s"
@@ -581,7 +593,7 @@ def read_text(
     return assemble([da], clean_attrs(attrs))
 
 
-def _read_block(path, lines, start, delim, dec, n_fields):
+def _read_block(path, lines, start, delim, dec, n_fields, trailing=False):
     """Parse the data lines into a (column, row) float64 array.
 
     Returns ``(block, n_rows, has_nan)``; ``block`` is None when a chunk does not parse
@@ -609,6 +621,7 @@ def _read_block(path, lines, start, delim, dec, n_fields):
             encoding_errors="replace",
             skip_blank_lines=True,
             chunksize=chunk_rows,
+            usecols=list(range(n_fields)) if trailing else None,
         )
         with reader:
             for chunk in reader:

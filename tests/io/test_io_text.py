@@ -85,6 +85,15 @@ def test_utf8_byte_order_mark(tmp_path):
     assert list(th.channel.values) == ["a"] and th.attrs["fs"] == 1.0
 
 
+def test_trailing_delimiter_column_dropped(tmp_path):
+    text = "units\tV\tN\t\ntime\ta\tb\t\n0\t1\t2\t\n0.1\t2\t3\t\n0.2\t3\t4\t\n"
+    th = mio.read(_write(tmp_path, "t.txt", text))["time_history"]
+    assert list(th.channel.values) == ["a", "b"] and list(th.units.values) == ["V", "N"]
+    np.testing.assert_array_equal(th.values, [[1, 2, 3], [2, 3, 4]])
+    with pytest.raises(FormatError, match=r"t.txt, line 2: column 4 has an empty name"):
+        mio.read(_write(tmp_path, "t.txt", text.replace("0.1\t2\t3\t", "0.1\t2\t3\t9")))
+
+
 def test_options_override_header(tmp_path):
     text = "0.1,1\n0.2,2\n0.3,3\n"
     th = mio.read(_write(tmp_path, "e.csv", text), fs=10.0, channels=["a", "b"], units=["V", "Pa"])[
