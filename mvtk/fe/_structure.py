@@ -140,8 +140,13 @@ def get_by_path(d: Mapping, path: str) -> Any:
     return cur
 
 
-def set_by_path(d: Mapping, path: str, value: Any) -> dict:
-    """Copy of ``d`` with the entry at dotted ``path`` replaced by ``value``."""
+def set_by_path(d: Mapping, path: str, value: Any, create: bool = False) -> dict:
+    """Copy of ``d`` with the entry at dotted ``path`` replaced by ``value``.
+
+    With ``create=True`` a missing last key is added to an existing table (e.g.
+    ``boundary.clamp_stiffness`` for a structure with a rigid clamp); unknown keys are
+    still rejected by :func:`build_model`.
+    """
     out = copy.deepcopy(dict(d))
     parts = path.split(".")
     try:
@@ -154,7 +159,7 @@ def set_by_path(d: Mapping, path: str, value: Any) -> dict:
             parent[int(last)] = value
         except (IndexError, ValueError):
             raise ConfigError(f"no entry {path!r} in the structure") from None
-    elif isinstance(parent, dict) and last in parent:
+    elif isinstance(parent, dict) and (last in parent or create):
         parent[last] = value
     else:
         raise ConfigError(f"no entry {path!r} in the structure")

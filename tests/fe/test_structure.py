@@ -63,6 +63,13 @@ def test_build_is_deterministic_and_perturbable():
     assert modal_analysis(build_model(s4), 1).fn_hz[0] < f1
     with pytest.raises(ConfigError, match="no entry 'materials.alu.E'"):
         set_by_path(s, "materials.alu.E", 1.0)
+    with pytest.raises(ConfigError, match="no entry 'boundary.clamp_stiffness'"):
+        set_by_path(s, "boundary.clamp_stiffness", 10.0)
+    s5 = set_by_path(s, "boundary.clamp_stiffness", 10.0, create=True)
+    assert modal_analysis(build_model(s5), 1).fn_hz[0] == pytest.approx(
+        modal_analysis(build_model(s4), 1).fn_hz[0], rel=1e-12)
+    with pytest.raises(ConfigError, match=r"boundary: unknown keys \['clamp_stifness'\]"):
+        build_model(set_by_path(s, "boundary.clamp_stifness", 10.0, create=True))
 
 
 def test_orthotropic_and_piezo_materials_and_element_size():
