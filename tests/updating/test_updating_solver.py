@@ -335,3 +335,21 @@ def test_affine_path_detects_geometry():
         r = update(start, [Parameter("structure.length", lower=0.1, upper=0.3)], f.tolist(),
                    builder=strip_model, affine=True)
     assert r.meta["affine_check_rel"] > 1e-4
+
+
+def test_mesh_change_on_both_sides_falls_back_to_eigenvalue_differences():
+    def remeshing(d):
+        # 12 elements at "round" tip masses, 13 otherwise: every small step remeshes there
+        m = d["tip_mass"]
+        n = 12 if abs(m - round(m, 4)) < 1e-12 else 13
+        return strip_model(with_values(d, {"structure.n_elements": n}))
+
+    f = _truth(3)
+    start = with_values(NOMINAL, {"tip_mass": 0.003})
+    r = _quiet_update(start, [Parameter("tip_mass", lower=0.0, upper=0.01)], f.tolist())
+    assert r.values[0] == pytest.approx(0.002, rel=1e-6)  # reference: fixed mesh
+    r2 = update(start, [Parameter("tip_mass", lower=0.0, upper=0.01)], f.tolist(),
+                builder=remeshing)
+    assert r2.meta["fd_eigen_parameters"] == ["tip_mass"]
+    # 13 instead of 12 elements away from round values: small discretisation offset only
+    assert r2.values[0] == pytest.approx(0.002, rel=0.05)
