@@ -62,16 +62,22 @@ Formats and their options
 ``netcdf`` (.nc)
     no options.
 ``tdms`` (.tdms, optional extra ``mvtk[tdms]``)
-    ``units``, ``fs``.
+    ``units``, ``fs``, ``allow_truncated``.
 ``wav`` (.wav)
     ``calibration``, ``units``, ``quantity``, ``channels``.
+
+Command line
+------------
+``mvtk read PATH [--format F] [--set key=value ...] [-o out.nc]`` prints the layout of
+a file and optionally converts it to netCDF (:mod:`mvtk.io._cli`).
 
 Errors
 ------
 Malformed content raises :class:`mvtk.errors.FormatError` naming the file and the line,
 record or channel and what was expected; unknown formats raise
 :class:`mvtk.errors.UnsupportedFormatError`; data that were usable after a repair come
-with a :class:`mvtk.errors.DataRepairWarning` saying what was repaired.
+with a :class:`mvtk.errors.DataRepairWarning` saying what was repaired. A truncated
+UFF record or TDMS segment is refused unless ``allow_truncated=True`` is passed.
 """
 
 from __future__ import annotations
