@@ -386,7 +386,7 @@ def impact_test(
     pulse_s: float = 2e-3,
     pretrigger_s: float = 0.05,
 ) -> xr.DataArray:
-    """A roving-free impact test: ``n_hits`` half-sine hammer pulses, one per record.
+    """An impact test at one point: ``n_hits`` half-sine hammer pulses, one per record.
 
     Each hit starts ``pretrigger_s`` into a record of ``record_s`` seconds; the hit
     amplitudes vary randomly (uniform 0.5..1.5 N peak). The response is the exact
