@@ -81,7 +81,8 @@ def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = Non
     The modal kinetic energy ``phi_i (M phi)_i`` is summed per DOF component.
     ``"in-plane"`` when ux and uy carry more of it than uz. Otherwise, for a plate (nodes
     spread in y) ``"torsion"`` when the uz field is mainly antisymmetric about the
-    mid-width line y = (y_min + y_max)/2, else ``"bending"``; for a beam (all nodes on
+    mid-width line y = (y_min + y_max)/2, else ``"bending"`` (without a mirror-symmetric
+    node layout: ``"torsion"`` when the rotations rx outweigh ry); for a beam (all nodes on
     a line) ``"torsion"`` when rx carries more energy than uz. A heuristic for strips and
     plates clamped on an x edge; it does not distinguish bending directions.
     """
@@ -94,9 +95,12 @@ def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = Non
         return "torsion" if comp[3] > comp[2] else "bending"
     if mirror is None:
         mirror = _mirror_map(model.nodes)
+    u = model.expand(phi)
     if mirror is None:
-        return "bending"
-    w = model.expand(phi)[:, 2]
+        # no mirror-symmetric node layout: twist (rx, slope across the width) against
+        # bending rotation (ry, slope along x)
+        return "torsion" if np.sum(u[:, 3] ** 2) > np.sum(u[:, 4] ** 2) else "bending"
+    w = u[:, 2]
     anti = float(np.sum((w - w[mirror]) ** 2))
     sym = float(np.sum((w + w[mirror]) ** 2))
     return "torsion" if anti > sym else "bending"

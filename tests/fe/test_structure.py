@@ -183,3 +183,10 @@ def test_documented_schema_example_builds():
     clamp = model.node_set("x0")
     model.dof_index(clamp[0], "ry")
     model.dof_index(clamp[0], "uz")
+
+
+def test_mode_labels_without_mirror_symmetric_mesh():
+    s = load_structure(DATA / "smart_beam.toml")
+    s = set_by_path(set_by_path(s, "patches.0.y0", 0.01), "patches.0.y1", 0.04)
+    res = modal_analysis(build_model(s), 2)
+    assert res.mode_type == ("bending", "torsion")
