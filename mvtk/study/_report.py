@@ -164,6 +164,12 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
     sec.table(pd.DataFrame(rows), "table3_rayleigh", "Table 3: Rayleigh alpha and beta",
               passed_column=None)
     ch = d.get("rayleigh_chowdhury", {})
+    if "error" in ch:
+        sec.text("Chowdhury pair not computed: its anchor rule (mode 1 and the lowest mode at "
+                 "which the cumulative effective mass reaches the target) needs more "
+                 "identified modes than the test provides. With two identified modes any "
+                 "anchor choice is modes 1 and 2, i.e. the half-power pair; the paper's "
+                 "Chowdhury pair rests on damping ratios the paper does not give.")
     if "anchors" in ch:
         sec.text("Chowdhury anchors (0-based identified modes): "
                  f"{ch['anchors']}; effective mass fractions (uz) of the paired nominal FE "
