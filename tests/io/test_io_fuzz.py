@@ -117,7 +117,7 @@ def test_mutated_files_read_or_raise_mvtk_error(fmt):
     raw, ext, options = BASE[fmt]
 
     @settings(
-        max_examples=25,
+        max_examples=60,
         deadline=None,
         derandomize=True,
         suppress_health_check=[HealthCheck.too_slow],
