@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import atexit
+import shutil
 import signal
 import struct
 import tempfile
@@ -19,6 +21,7 @@ import mvtk.io as mio
 from mvtk.errors import MvtkError
 
 _DIR = Path(tempfile.mkdtemp(prefix="mvtk-io-fuzz-"))
+atexit.register(shutil.rmtree, _DIR, ignore_errors=True)
 
 
 def _uff_ascii() -> bytes:
