@@ -308,3 +308,27 @@ def test_shell_super_element_modal_form_and_massless_warning():
     assert np.abs(ss.poles()).max() < 2 * np.pi * 2000.0
     ref = harmonic(model, f, dof_load(model, nodes[2], "uz")[None, :], [5.0, 20.0])[0]
     np.testing.assert_allclose(ss.frequency_response([5.0, 20.0])[0, 0], ref, rtol=1e-3)
+
+
+def test_static_correction_accepts_a_restrained_shell_super_element():
+    """Regression: the restraint check used K_ii/M_ii as scale, which the nearly massless
+    drilling coordinates of a shell super element inflate; mode 1 of a clamped plate
+    strip was then taken for a rigid-body mode."""
+    from mvtk.fe import plate_model
+
+    model = plate_model(0.18, 0.04, [Ply(STEEL, 0.5e-3)], nx=12, ny=3, clamp="x0",
+                        points={"tip": (0.18, 0.02)})
+    tip = int(model.node_set("tip")[0])
+    se = craig_bampton(model, ["tip"], 4)
+    p = structural_plant(se, [(tip, "uz")], [(tip, "uz")], form="modal", n_modes=2,
+                         static_correction=True)
+    static = mvtk_static_tip(model, tip)
+    np.testing.assert_allclose(p.to_state_space().dc_gain()[0, 0], static, rtol=1e-6)
+
+
+def mvtk_static_tip(model, tip):
+    from mvtk.fe import static_solve
+
+    f = np.zeros(model.n_dof)
+    f[model.dof_index(tip, "uz")] = 1.0
+    return static_solve(model, f)[model.dof_index(tip, "uz")]
