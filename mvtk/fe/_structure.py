@@ -129,15 +129,49 @@ def load_structure(path: str | Path) -> dict:
         raise ConfigError(f"structure file {str(path)!r} is not valid TOML: {err}") from err
 
 
+def _step(node: Any, part: str, done: list[str]) -> Any:
+    """One step of a dotted-path walk; ConfigError says why it cannot go on."""
+    where = ".".join(done) or "<root>"
+    if isinstance(node, Mapping):
+        if part not in node:
+            raise ConfigError(
+                f"no key {part!r} under {where}; available keys: {sorted(map(str, node))}"
+            )
+        return node[part]
+    if isinstance(node, list | tuple):
+        try:
+            i = int(part)
+        except ValueError:
+            raise ConfigError(
+                f"{where} is a list, expected an integer index, got {part!r}"
+            ) from None
+        if not -len(node) <= i < len(node):
+            raise ConfigError(
+                f"index {i} out of range for {where} (list of length {len(node)})"
+            )
+        return node[i]
+    raise ConfigError(
+        f"{where} is a {type(node).__name__} value, not a table or list, "
+        f"so it has no field {part!r}"
+    )
+
+
+def walk_path(d: Mapping, parts: list[str]) -> Any:
+    """Value reached by the path ``parts`` in nested dicts/lists (ConfigError otherwise)."""
+    node: Any = d
+    done: list[str] = []
+    for part in parts:
+        node = _step(node, part, done)
+        done.append(part)
+    return node
+
+
 def get_by_path(d: Mapping, path: str) -> Any:
     """Value at a dotted path (``"materials.steel.E"``; list items by index ``layers.0``)."""
-    cur: Any = d
-    for part in path.split("."):
-        try:
-            cur = cur[int(part)] if isinstance(cur, list) else cur[part]
-        except (KeyError, IndexError, ValueError, TypeError):
-            raise ConfigError(f"no entry {path!r} in the structure (failed at {part!r})") from None
-    return cur
+    try:
+        return walk_path(d, path.split("."))
+    except ConfigError as err:
+        raise ConfigError(f"no entry {path!r} in the structure: {err}") from None
 
 
 def set_by_path(d: Mapping, path: str, value: Any, create: bool = False) -> dict:

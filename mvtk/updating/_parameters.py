@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from ..errors import ConfigError, ParameterError
+from ..fe._structure import walk_path
 
 __all__ = ["Parameter", "get_path", "set_path", "with_values"]
 
@@ -25,35 +26,6 @@ def _split(path: str) -> list[str]:
             f"got {path!r}"
         )
     return path.split(".")
-
-
-def _step(node: Any, part: str, path: str, done: list[str]) -> Any:
-    where = ".".join(done) or "<root>"
-    if isinstance(node, Mapping):
-        if part not in node:
-            raise ConfigError(
-                f"parameter path {path!r}: no key {part!r} under {where}; "
-                f"available keys: {sorted(map(str, node))}"
-            )
-        return node[part]
-    if isinstance(node, Sequence) and not isinstance(node, str):
-        try:
-            i = int(part)
-        except ValueError:
-            raise ConfigError(
-                f"parameter path {path!r}: {where} is a list, expected an integer index, "
-                f"got {part!r}"
-            ) from None
-        if not -len(node) <= i < len(node):
-            raise ConfigError(
-                f"parameter path {path!r}: index {i} out of range for {where} "
-                f"(list of length {len(node)})"
-            )
-        return node[i]
-    raise ConfigError(
-        f"parameter path {path!r}: {where} is a {type(node).__name__} value, "
-        f"not a table or list, so it has no field {part!r}"
-    )
 
 
 def _is_number(v: Any) -> bool:
@@ -79,12 +51,10 @@ def get_path(description: Mapping[str, Any], path: str) -> float:
     ConfigError
         If the path does not exist or the field is not a (non-boolean) number.
     """
-    parts = _split(path)
-    node: Any = description
-    done: list[str] = []
-    for part in parts:
-        node = _step(node, part, path, done)
-        done.append(part)
+    try:
+        node = walk_path(description, _split(path))
+    except ConfigError as err:
+        raise ConfigError(f"parameter path {path!r}: {err}") from None
     if not _is_number(node):
         raise ConfigError(
             f"parameter path {path!r}: expected a number, found {type(node).__name__} "
@@ -97,9 +67,7 @@ def set_path(description: Any, path: str, value: float) -> None:
     """Set the numeric field ``path`` of ``description`` in place (see :func:`get_path`)."""
     get_path(description, path)  # validates path and type
     parts = _split(path)
-    node = description
-    for part in parts[:-1]:
-        node = node[part] if isinstance(node, Mapping) else node[int(part)]
+    node = walk_path(description, parts[:-1])
     last = parts[-1]
     if isinstance(node, Mapping):
         node[last] = float(value)
