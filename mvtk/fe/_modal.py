@@ -106,10 +106,6 @@ def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = Non
     return "torsion" if anti > sym else "bending"
 
 
-#: Pivots of the LU of K below this fraction of the largest mark a singular K.
-_SINGULAR_PIVOT = 1e-12
-
-
 def _smooth_trial_scale(model: FEModel) -> float:
     """Smallest Rayleigh quotient (rad/s)^2 of smooth quadratic bending trial fields.
 
@@ -144,55 +140,17 @@ def _smooth_trial_scale(model: FEModel) -> float:
 
 
 def _lowest_modes(model: FEModel, n: int, sigma: float | None):
-    """Lowest eigenpairs by shift-invert Lanczos with one factorisation.
+    """Lowest eigenpairs by :func:`mvtk.fe.eigsh_lowest` (one factorisation).
 
-    With ``sigma=None`` K is factorised; when it is positive definite (all pivots above
-    ``_SINGULAR_PIVOT`` of the largest) that LU is reused with shift 0, otherwise the
-    shift is -1 % of :func:`_smooth_trial_scale`. The sparse path is used even for small
-    models: a dense ``eigh(K, M)`` loses the lowest eigenvalues to round-off because the
-    token drilling inertia makes M ill-conditioned.
+    With ``sigma=None`` the shift is 0 when K is non-singular; otherwise it is -1 % of
+    :func:`_smooth_trial_scale`, a model-aware estimate of the first elastic eigenvalue.
     """
-    import scipy.sparse.linalg as spla
-
-    from ..errors import ConvergenceError
-    from ._solvers import EigenSolution
-
-    ndof = model.n_dof
-    if n >= ndof - 1:
-        return eigsh_lowest(model.K, model.M, n, sigma=sigma)
-    lu = None
+    singular_shift = None
     if sigma is None:
-        try:
-            lu = factorize(model.K)
-            piv = lu.U.diagonal()
-            if np.any(piv <= _SINGULAR_PIVOT * np.max(np.abs(piv))):
-                lu = None
-        except ParameterError:
-            lu = None
-        if lu is not None:
-            sigma = 0.0
-        else:
-            scale = _smooth_trial_scale(model)
-            if not np.isfinite(scale):
-                d = model.K.diagonal() / model.M.diagonal()
-                scale = float(np.median(np.abs(d)))
-            sigma = -1e-2 * scale
-    if lu is None:
-        lu = factorize(model.K - sigma * model.M)
-    opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
-    try:
-        w, v = spla.eigsh(model.K, k=n, M=model.M, sigma=sigma, which="LM", OPinv=opinv,
-                          ncv=min(ndof, max(2 * n + 1, 20)))
-    except spla.ArpackNoConvergence as err:
-        raise ConvergenceError(
-            f"eigsh did not converge for {n} modes of a {ndof}-DOF model"
-        ) from err
-    order = np.argsort(w)
-    w, v = w[order], v[:, order]
-    v = v / np.sqrt(np.einsum("ij,ij->j", v, model.M @ v))
-    big = np.argmax(np.abs(v), axis=0)
-    v = v * np.sign(v[big, np.arange(v.shape[1])])
-    return EigenSolution(omega2=w, vectors=v)
+        scale = _smooth_trial_scale(model)
+        if np.isfinite(scale):
+            singular_shift = -1e-2 * scale
+    return eigsh_lowest(model.K, model.M, n, sigma=sigma, singular_shift=singular_shift)
 
 
 def modal_analysis(

@@ -53,7 +53,7 @@ def factorize(A) -> spla.SuperLU:
         ) from err
 
 
-def _default_shift(K, M) -> tuple[float, spla.SuperLU | None]:
+def _default_shift(K, M, singular_shift=None) -> tuple[float, spla.SuperLU | None]:
     """Shift for :func:`eigsh_lowest`: 0 if K is safely invertible, else slightly negative.
 
     Returns the shift and, when it is 0, the factorisation of K (to be reused).
@@ -62,10 +62,17 @@ def _default_shift(K, M) -> tuple[float, spla.SuperLU | None]:
     try:
         lu = factorize(K)
         x = lu.solve(K @ x0)
-        if np.all(np.isfinite(x)) and np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0):
+        piv = np.abs(lu.U.diagonal())
+        if (
+            piv.min() > 1e-12 * piv.max()
+            and np.all(np.isfinite(x))
+            and np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0)
+        ):
             return 0.0, lu
     except ParameterError:
         pass
+    if singular_shift is not None:
+        return float(singular_shift), None
     mdiag = M.diagonal()
     ratio = K.diagonal()[mdiag > 0] / mdiag[mdiag > 0]
     ratio = ratio[ratio > 0]
@@ -95,7 +102,10 @@ class EigenSolution:
     vectors: np.ndarray
 
 
-def eigsh_lowest(K, M, n: int, sigma: float | None = None, tol: float = 0.0) -> EigenSolution:
+def eigsh_lowest(
+    K, M, n: int, sigma: float | None = None, tol: float = 0.0,
+    singular_shift: float | None = None,
+) -> EigenSolution:
     """Lowest ``n`` eigenpairs of the generalised symmetric problem by shift-invert.
 
     One factorisation of ``K - sigma M`` is made and passed to ``eigsh`` as
@@ -106,16 +116,21 @@ def eigsh_lowest(K, M, n: int, sigma: float | None = None, tol: float = 0.0) -> 
     ----------
     K, M : sparse matrix, shape (n_dof, n_dof)
     n : int
-        Number of eigenpairs wanted (``1 <= n < n_dof``; for small problems a dense
-        solver is used).
+        Number of eigenpairs wanted (``1 <= n <= n_dof``; a dense solver is used only
+        when ``n >= n_dof - 1``, because a dense ``eigh(K, M)`` loses the lowest
+        eigenvalues to round-off when M is ill-conditioned, as with the token drilling
+        inertia of shells).
     sigma : float, optional
         Shift in (rad/s)^2. By default ``sigma = 0`` when ``K`` is non-singular
         (constrained structures: the fastest and most accurate choice) and a small
         negative shift ``-min((2 pi 0.5 Hz)^2, 1e-4 min_i(K_ii/M_ii))`` when it is
         singular (free-free structures; rigid-body modes then come out near zero).
-        Singularity is detected by a solve round trip, not only by a zero pivot.
+        Singularity is detected by the LU pivots and a solve round trip.
     tol : float
         Tolerance passed to ``eigsh`` (0 = machine precision).
+    singular_shift : float, optional
+        Shift to use instead of the default one when K turns out singular (a caller that
+        knows the scale of the first elastic mode, e.g. from a trial field, passes it).
 
     Returns
     -------
@@ -128,7 +143,7 @@ def eigsh_lowest(K, M, n: int, sigma: float | None = None, tol: float = 0.0) -> 
         raise DimensionError(f"K {K.shape} and M {M.shape} must be square and equal")
     if not 1 <= n <= ndof:
         raise ParameterError(f"number of modes must be in 1..{ndof}, got {n}")
-    if ndof <= 400 or n >= ndof - 1:
+    if n >= ndof - 1:
         import scipy.linalg as sla
 
         w, v = sla.eigh(K.toarray(), M.toarray())
@@ -136,7 +151,7 @@ def eigsh_lowest(K, M, n: int, sigma: float | None = None, tol: float = 0.0) -> 
     else:
         lu = None
         if sigma is None:
-            sigma, lu = _default_shift(K, M)
+            sigma, lu = _default_shift(K, M, singular_shift)
         if lu is None:
             lu = factorize(K - sigma * M)
         opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
