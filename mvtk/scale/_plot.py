@@ -1,0 +1,67 @@
+"""Histogram figure of Monte-Carlo natural frequencies (matplotlib imported when called)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ParameterError
+
+__all__ = ["plot_fn_histogram"]
+
+
+def plot_fn_histogram(result, modes=None, bins: int = 30):
+    """Histograms of the sampled natural frequencies, one panel per mode.
+
+    Parameters
+    ----------
+    result : MonteCarloResult
+        Output of :func:`mvtk.scale.monte_carlo`.
+    modes : sequence of int, optional
+        1-based mode numbers to show (default: all, at most 6).
+    bins : int
+        Histogram bins per panel.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        An Agg-backed figure (no pyplot state); each panel marks the mean and the 5 %
+        and 95 % percentiles. Save it with ``fig.savefig`` or
+        :func:`mvtk.plot.figure_to_png`.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fn = np.asarray(getattr(result, "fn_hz", None) if result is not None else None)
+    if fn.ndim != 2:
+        raise ParameterError(
+            f"plot_fn_histogram: expected a MonteCarloResult, got {type(result).__name__}"
+        )
+    n_modes = fn.shape[1]
+    modes = list(range(1, min(n_modes, 6) + 1)) if modes is None else [int(m) for m in modes]
+    bad = [m for m in modes if not 1 <= m <= n_modes]
+    if bad or not modes:
+        raise ParameterError(
+            f"plot_fn_histogram: modes must be 1-based numbers in 1..{n_modes}, got {modes}"
+        )
+    ok = np.isfinite(fn).all(axis=1)
+    ncol = min(3, len(modes))
+    nrow = -(-len(modes) // ncol)
+    fig = Figure(figsize=(3.2 * ncol, 2.6 * nrow), layout="constrained")
+    FigureCanvasAgg(fig)
+    for k, m in enumerate(modes):
+        ax = fig.add_subplot(nrow, ncol, k + 1)
+        col = fn[ok, m - 1]
+        ax.hist(col, bins=bins, color="C0", alpha=0.8)
+        mean = float(np.mean(col))
+        p5, p95 = np.percentile(col, [5, 95])
+        ax.axvline(mean, color="k", lw=1.2, label="mean")
+        ax.axvline(p5, color="C3", ls="--", lw=1, label="5 / 95 %")
+        ax.axvline(p95, color="C3", ls="--", lw=1)
+        cov = np.std(col, ddof=1) / mean if col.size > 1 else np.nan
+        ax.set_title(f"mode {m}: {mean:.4g} Hz, CoV {100 * cov:.2g} %", fontsize=9)
+        ax.set_xlabel("natural frequency (Hz)")
+        ax.set_ylabel("samples")
+        if k == 0:
+            ax.legend(fontsize=7)
+    fig.suptitle(f"Monte Carlo, {int(ok.sum())} samples", fontsize=10)
+    return fig
