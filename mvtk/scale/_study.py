@@ -228,7 +228,7 @@ def parameter_study(
 
 
 def _raise_for(err: Exception, index: int, paths, row):
-    vals = ", ".join(f"{p}={v!r}" for p, v in zip(paths, row))
+    vals = ", ".join(f"{p}={float(v)!r}" for p, v in zip(paths, row))
     raise type(err)(f"parameter_study: sample {index} ({vals}) failed: {err}") from err
 
 
@@ -262,7 +262,7 @@ def _run_client(cl, desc, paths, values, builder, n_modes, on_error, size):
     if on_error == "raise":
         for i, e in enumerate(errors):
             if e:
-                vals = ", ".join(f"{p}={v!r}" for p, v in zip(paths, values[i]))
+                vals = ", ".join(f"{p}={float(v)!r}" for p, v in zip(paths, values[i]))
                 raise _error_class(e)(f"parameter_study: sample {i} ({vals}) failed: {e}")
     return fn, errors
 
