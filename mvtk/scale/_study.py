@@ -112,7 +112,7 @@ def _connect(client, n_workers):
         if client == "local":
             cluster = distributed.LocalCluster(
                 n_workers=n_workers or min(2, os.cpu_count() or 1), threads_per_worker=1,
-                processes=True, dashboard_address=None,
+                processes=True, dashboard_address=":0",
             )
             return distributed.Client(cluster), True
         return distributed.Client(client), True
