@@ -3,6 +3,7 @@
 Each stage contributes its sub-command from a private ``_cli`` module exposing
 ``add_parser(subparsers)``:
 
+- ``mvtk read PATH``             (:mod:`mvtk.io`)
 - ``mvtk modes STRUCTURE.toml``  (:mod:`mvtk.fe`)
 - ``mvtk update STUDY.toml``     (:mod:`mvtk.updating`)
 - ``mvtk reduce STUDY.toml``     (:mod:`mvtk.reduction`)
@@ -23,6 +24,7 @@ from .errors import MvtkError
 #: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
 COMMAND_MODULES = (
     "mvtk._run_cli",
+    "mvtk.io._cli",
     "mvtk.fe._cli",
     "mvtk.updating._cli",
     "mvtk.reduction._cli",
