@@ -16,6 +16,8 @@ Entry points
     FE modal analyses for many parameter sets, in process or on a dask cluster.
 ``monte_carlo(description, distributions, n, rng, ...) -> MonteCarloResult``
     Material/geometry scatter propagated to eigenfrequencies (statistics table).
+``eigen_sensitivity(description, parameters, *, builder, n_modes, ..., client)``
+    The updating Jacobian (:func:`mvtk.updating.eigen_sensitivity`), one task per column.
 ``plot_fn_histogram(result, modes=None, bins=30)`` (in :mod:`mvtk.scale._plot`)
     Histogram figure of the Monte-Carlo frequencies.
 
@@ -23,6 +25,7 @@ See ``docs/scaling.md`` for running the same code on a remote cluster.
 """
 
 from ._campaign import DEFAULT_TIME_CHUNK, open_campaign
+from ._jacobian import eigen_sensitivity
 from ._plot import plot_fn_histogram
 from ._spectral import map_channels, psd
 from ._study import (
@@ -38,6 +41,7 @@ __all__ = [
     "DISTRIBUTION_KINDS",
     "MonteCarloResult",
     "draw_samples",
+    "eigen_sensitivity",
     "map_channels",
     "monte_carlo",
     "open_campaign",

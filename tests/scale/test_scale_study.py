@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import mvtk.fe
+import mvtk.updating
 from mvtk.errors import ConfigError, DataRepairWarning, ParameterError
 from mvtk.scale import (
     DISTRIBUTION_KINDS,
@@ -210,3 +211,36 @@ def test_description_is_not_mutated_by_a_study():
     before = copy.deepcopy(STRIP)
     parameter_study(STRIP, {"materials.al.E": [50e9]}, n_modes=1)
     assert STRIP == before
+
+
+def test_jacobian_columns_in_process_and_on_the_cluster(two_worker_client):
+    import mvtk.updating
+    from mvtk.scale import eigen_sensitivity
+
+    params = ["materials.al.E", "materials.al.rho", "structure.layers.0.thickness"]
+    ref = mvtk.updating.eigen_sensitivity(STRIP, params, builder=mvtk.fe.build_model,
+                                          n_modes=3)
+    for client in (None, two_worker_client):
+        out = eigen_sensitivity(STRIP, params, n_modes=3, client=client)
+        assert out.paths == tuple(params)
+        np.testing.assert_allclose(out.fn_hz, ref.fn_hz, rtol=1e-10)
+        # to 1e-6 of each column's largest entry (eigenvector round-off on tiny entries)
+        scale = np.abs(ref.d_fn_hz).max(axis=0)
+        np.testing.assert_allclose(out.d_fn_hz / scale, ref.d_fn_hz / scale, atol=1e-6)
+    # closed form: f ~ sqrt(E / rho) * h  ->  normalised sensitivities 1/2, -1/2, 1
+    np.testing.assert_allclose(out.normalised[:, :2], [[0.5, -0.5]] * 3, atol=2e-5)
+    np.testing.assert_allclose(out.normalised[0, 2], 1.0, rtol=1e-3)
+
+
+def test_jacobian_rejects_a_remeshing_parameter():
+    from mvtk.errors import DimensionError
+    from mvtk.scale import eigen_sensitivity
+
+    with pytest.raises(DimensionError, match="perturbing 'materials.al.E' changed the model's "):
+        eigen_sensitivity(STRIP, ["materials.al.E"], n_modes=2, builder=_remeshing_builder)
+
+
+def _remeshing_builder(description):
+    """A builder whose mesh depends on E (as a geometry parameter's mesh would)."""
+    finer = description["materials"]["al"]["E"] > 70e9
+    return mvtk.fe.build_model(mvtk.fe.set_by_path(description, "mesh.nx", 9 if finer else 8))
