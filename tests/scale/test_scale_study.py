@@ -229,7 +229,8 @@ def test_jacobian_columns_in_process_and_on_the_cluster(two_worker_client):
         np.testing.assert_allclose(out.d_fn_hz / scale, ref.d_fn_hz / scale, atol=1e-6)
     # closed form: f ~ sqrt(E / rho) * h  ->  normalised sensitivities 1/2, -1/2, 1
     np.testing.assert_allclose(out.normalised[:, :2], [[0.5, -0.5]] * 3, atol=2e-5)
-    np.testing.assert_allclose(out.normalised[0, 2], 1.0, rtol=1e-3)
+    # f1 ~ h in the thin (Kirchhoff) limit; transverse shear (L/h = 100) takes ~0.1 %
+    np.testing.assert_allclose(out.normalised[0, 2], 1.0, rtol=3e-3)
 
 
 def test_jacobian_rejects_a_remeshing_parameter():
