@@ -245,3 +245,15 @@ def _remeshing_builder(description):
     """A builder whose mesh depends on E (as a geometry parameter's mesh would)."""
     finer = description["materials"]["al"]["E"] > 70e9
     return mvtk.fe.build_model(mvtk.fe.set_by_path(description, "mesh.nx", 9 if finer else 8))
+
+
+@pytest.mark.slow
+def test_client_local_starts_and_closes_a_process_cluster():
+    pytest.importorskip("dask.distributed")
+    samples = {"materials.al.E": [65e9, 75e9, 72e9]}
+    ref = parameter_study(STRIP, samples, n_modes=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # port-in-use notices of the dashboard
+        out = parameter_study(STRIP, samples, n_modes=2, client="local", n_workers=2)
+    np.testing.assert_allclose(out["fn_hz"].values, ref["fn_hz"].values, rtol=1e-10)
+    assert out.attrs["scheduler"].startswith("tcp://")
