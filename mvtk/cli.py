@@ -4,6 +4,7 @@ Each stage contributes its sub-command from a private ``_cli`` module exposing
 ``add_parser(subparsers)``:
 
 - ``mvtk read PATH``             (:mod:`mvtk.io`)
+- ``mvtk damping FILE``          (:mod:`mvtk.damping`)
 - ``mvtk modes STRUCTURE.toml``  (:mod:`mvtk.fe`)
 - ``mvtk update STUDY.toml``     (:mod:`mvtk.updating`)
 - ``mvtk reduce STUDY.toml``     (:mod:`mvtk.reduction`)
@@ -25,6 +26,7 @@ from .errors import MvtkError
 COMMAND_MODULES = (
     "mvtk._run_cli",
     "mvtk.io._cli",
+    "mvtk.damping._cli",
     "mvtk.fe._cli",
     "mvtk.updating._cli",
     "mvtk.reduction._cli",
