@@ -10,6 +10,8 @@ Entry points
     reported at once.
 ``psd(x, fs, window, nperseg, noverlap, detrend, scaling, *, combine_records, compute)``
     Chunked Welch PSD equal to :func:`mvtk.signal.psd` on the same data.
+``csd(x, reference, fs, window, nperseg, noverlap, detrend, scaling, *, compute)``
+    Chunked Welch cross-spectral matrix equal to :func:`mvtk.signal.csd`.
 ``map_channels(func, x, *, output_dims, output_sizes, output_dtype, kwargs)``
     Per-channel estimators through ``xarray.apply_ufunc(dask="parallelized")``.
 ``parameter_study(description, samples, *, builder, n_modes, client, on_error)``
@@ -27,7 +29,7 @@ See ``docs/scaling.md`` for running the same code on a remote cluster.
 from ._campaign import DEFAULT_TIME_CHUNK, open_campaign
 from ._jacobian import eigen_sensitivity
 from ._plot import plot_fn_histogram
-from ._spectral import map_channels, psd
+from ._spectral import csd, map_channels, psd
 from ._study import (
     DISTRIBUTION_KINDS,
     MonteCarloResult,
@@ -39,6 +41,7 @@ from ._study import (
 __all__ = [
     "DEFAULT_TIME_CHUNK",
     "DISTRIBUTION_KINDS",
+    "csd",
     "MonteCarloResult",
     "draw_samples",
     "eigen_sensitivity",

@@ -9,7 +9,7 @@ import scipy.signal
 from ..errors import DimensionError, FormatError, ParameterError
 from ._deps import require_dask
 
-__all__ = ["psd", "map_channels"]
+__all__ = ["psd", "csd", "map_channels"]
 
 
 def _as_lazy_history(x):
@@ -64,6 +64,136 @@ def _segment_sums(block: np.ndarray, n_starts: int, step: int, nperseg: int,
         spec = scipy.fft.rfft(seg * win, axis=-1)
         out += np.sum(spec.real**2 + spec.imag**2, axis=-2)
     return out
+
+
+def _cross_sums(block: np.ndarray, n_starts: int, step: int, nperseg: int, win: np.ndarray,
+                detrend, iy: np.ndarray, ir: np.ndarray) -> np.ndarray:
+    """Sum over segments of ``Y_i conj(R_j)``: shape (..., len(iy), len(ir), nf)."""
+    nf = nperseg // 2 + 1
+    lead = block.shape[:-2]
+    out = np.zeros(lead + (len(iy), len(ir), nf), dtype=complex)
+    if n_starts <= 0:
+        return out
+    offs = np.arange(nperseg)
+    per_seg = max(1, int(np.prod(block.shape[:-1]))) * nperseg * 24
+    sub = max(1, (32 * 2**20) // per_seg)
+    for s0 in range(0, n_starts, sub):
+        idx = (np.arange(s0, min(s0 + sub, n_starts)) * step)[:, None] + offs
+        seg = block[..., idx]  # (..., channel, nseg, nperseg)
+        if detrend == "constant":
+            seg = seg - seg.mean(axis=-1, keepdims=True)
+        elif detrend == "linear":
+            seg = scipy.signal.detrend(seg, axis=-1, type="linear")
+        spec = scipy.fft.rfft(seg * win, axis=-1)
+        out += np.einsum("...isf,...jsf->...ijf", spec[..., iy, :, :], spec[..., ir, :, :].conj())
+    return out
+
+
+def _blocks(data, n: int, nperseg: int, step: int, n_seg: int, lead_chunks):
+    """(piece, n_starts) per block: pieces hold the segments starting in each block."""
+    chunk0 = data.chunks[-1][0]
+    block = max(int(np.ceil(max(chunk0, nperseg) / step)), 1) * step
+    data = data.rechunk(lead_chunks + (block,))
+    for b0 in range(0, n_seg * step, block):
+        first = b0 // step
+        k = min(block // step, n_seg - first)
+        stop = min(b0 + (k - 1) * step + nperseg, n)
+        yield data[..., b0:stop].rechunk(lead_chunks + (-1,)), k
+
+
+def csd(
+    x,
+    reference=None,
+    fs: float | None = None,
+    window="hann",
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    detrend="constant",
+    scaling: str = "density",
+    *,
+    compute: bool = True,
+):
+    """Welch cross-spectral density matrix of a dask-backed time history, chunk by chunk.
+
+    Same numbers (to round-off), dims and coordinates as :func:`mvtk.signal.csd`
+    (``S[i, j] = E[Y_i conj(R_j)]``, one-sided), computed block by block like
+    :func:`psd`; a leading ``record`` dim is kept.
+
+    Parameters
+    ----------
+    x : xarray.DataArray or xarray.Dataset
+        Dims ``(..., "channel", "time")``.
+    reference : str, int, list or dict, optional
+        Reference channels (names, positions or a coordinate filter such as
+        ``{"quantity": "force"}``); default every channel.
+    fs, window, nperseg, noverlap, detrend, scaling
+        As in :func:`mvtk.signal.csd`.
+    compute : bool
+        Return computed values (default) or a lazy DataArray.
+
+    Returns
+    -------
+    xarray.DataArray
+        Complex, dims ``(..., "response", "reference", "frequency")``, frequency in Hz.
+    """
+    require_dask("mvtk.scale.csd")
+    import dask.array as dsa
+    import xarray as xr
+
+    from ..signal._input import select_channels
+    from ..signal._spectral import (
+        _one_sided_factor,
+        _pair_coords,
+        _window,
+        welch_segments_params,
+    )
+
+    x = _as_lazy_history(x)
+    fs = _fs(x, fs)
+    n = x.sizes["time"]
+    nperseg, noverlap, window = welch_segments_params(n, fs, nperseg, noverlap, window)
+    if scaling not in ("density", "spectrum"):
+        raise ParameterError(f"scaling must be 'density' or 'spectrum', got {scaling!r}")
+    if detrend not in ("constant", "linear", False, None):
+        raise ParameterError(f"detrend must be 'constant', 'linear' or False, got {detrend!r}")
+    names = [str(c) for c in x["channel"].values]
+    ref = x if reference is None else select_channels(x, reference, name="reference")
+    ir = np.array([names.index(str(c)) for c in ref["channel"].values])
+    iy = np.arange(len(names))
+    win = _window(window, nperseg)
+    step = nperseg - noverlap
+    n_seg = (n - nperseg) // step + 1
+    nf = nperseg // 2 + 1
+    data = x.data if isinstance(x.data, dsa.Array) else dsa.from_array(x.values)
+    lead_chunks = data.chunks[:-2] + ((len(names),),)
+    data = data.rechunk(lead_chunks + (data.chunks[-1],))
+    parts = [
+        dsa.map_blocks(_cross_sums, piece, k, step, nperseg, win, detrend, iy, ir,
+                       dtype=complex, new_axis=[data.ndim],
+                       chunks=data.chunks[:-2] + ((len(iy),), (len(ir),), (nf,)))
+        for piece, k in _blocks(data, n, nperseg, step, n_seg, lead_chunks)
+    ]
+    total = dsa.stack(parts, axis=0).sum(axis=0)
+    if scaling == "density":
+        scale = 1.0 / (fs * np.sum(win**2))
+    else:
+        scale = 1.0 / np.sum(win) ** 2
+    sxy = total * (scale * _one_sided_factor(nf, nperseg) / n_seg)
+    f = scipy.fft.rfftfreq(nperseg, 1 / fs)
+    lead_dims = tuple(x.dims[:-2])
+    y0 = x.isel({d: 0 for d in lead_dims})
+    coords = _pair_coords(y0, y0.isel(channel=ir), f)
+    for name, c in x.coords.items():
+        if c.dims and set(c.dims) <= set(lead_dims):
+            coords[name] = c
+    out = xr.DataArray(
+        sxy, dims=lead_dims + ("response", "reference", "frequency"), coords=coords,
+        attrs={**{k: v for k, v in x.attrs.items() if k != "t0_s"}, "spectrum": "csd",
+               "scaling": scaling, "window": str(window), "nperseg": nperseg,
+               "noverlap": noverlap, "fs": fs, "df_hz": fs / nperseg, "n_averages": n_seg},
+    )
+    out.name = "csd"
+    return out.compute() if compute else out
 
 
 def psd(
@@ -140,20 +270,12 @@ def psd(
     step = nperseg - noverlap
     n_seg = (n - nperseg) // step + 1
     data = x.data if isinstance(x.data, dsa.Array) else dsa.from_array(x.values)
-    chunk0 = data.chunks[-1][0]
-    block = max(int(np.ceil(max(chunk0, nperseg) / step)), 1) * step
-    data = data.rechunk(data.chunks[:-1] + (block,))
     nf = nperseg // 2 + 1
-    parts = []
-    for b0 in range(0, n_seg * step, block):
-        first = b0 // step
-        k = min(block // step, n_seg - first)
-        stop = min(b0 + (k - 1) * step + nperseg, n)
-        piece = data[..., b0:stop].rechunk(data.chunks[:-1] + (-1,))
-        parts.append(dsa.map_blocks(
-            _segment_sums, piece, k, step, nperseg, win, detrend,
-            dtype=float, chunks=piece.chunks[:-1] + ((nf,),),
-        ))
+    parts = [
+        dsa.map_blocks(_segment_sums, piece, k, step, nperseg, win, detrend,
+                       dtype=float, chunks=piece.chunks[:-1] + ((nf,),))
+        for piece, k in _blocks(data, n, nperseg, step, n_seg, data.chunks[:-1])
+    ]
     total = dsa.stack(parts, axis=0).sum(axis=0)
     if scaling == "density":
         scale = 1.0 / (fs * np.sum(win**2))

@@ -137,3 +137,46 @@ def test_map_channels_bad_inputs(history):
         map_channels(3, history)
     with pytest.raises(ParameterError, match=r"output_sizes must give the length .*\['q'\]"):
         map_channels(_percentiles, history.chunk({"time": 100}), output_dims=("q",))
+
+
+@pytest.mark.parametrize(
+    "chunk, kwargs",
+    [(1500, {"nperseg": 512}),
+     (3001, {"nperseg": 1000, "noverlap": 300, "reference": "a"}),
+     (999, {"nperseg": 256, "reference": [0, 2], "detrend": "linear", "window": "boxcar"}),
+     (4000, {"nperseg": 640, "reference": {"units": "N"}, "scaling": "spectrum"})],
+)
+def test_chunked_csd_equals_in_memory_csd(history, chunk, kwargs):
+    from mvtk.scale import csd
+
+    ref = mvtk.signal.csd(history, **kwargs)
+    out = csd(history.chunk({"time": chunk}), **kwargs)
+    assert out.dims == ref.dims
+    np.testing.assert_allclose(out.values, ref.values, rtol=1e-10,
+                               atol=1e-13 * np.abs(ref.values).max())
+    for c in ("response", "reference", "reference_units", "response_quantity"):
+        assert list(out[c].values) == list(ref[c].values), c
+    assert out.attrs["n_averages"] == ref.attrs["n_averages"]
+
+
+def test_csd_keeps_the_record_dim(history, rng):
+    from mvtk.scale import csd
+
+    recs = [history.copy(data=rng.standard_normal(history.shape)) for _ in range(2)]
+    out = csd(xr.concat(recs, dim="record").chunk({"time": 2500}), nperseg=300, reference="c")
+    assert out.dims == ("record", "response", "reference", "frequency")
+    for i, r in enumerate(recs):
+        np.testing.assert_allclose(out.isel(record=i).values,
+                                   mvtk.signal.csd(r, nperseg=300, reference="c").values,
+                                   rtol=1e-10, atol=1e-16)
+
+
+def test_csd_bad_inputs(history):
+    from mvtk.scale import csd
+
+    with pytest.raises(ParameterError, match="reference: no channel matches"):
+        csd(history, reference={"quantity": "pressure"})
+    with pytest.raises(ParameterError, match="scaling must be 'density' or 'spectrum'"):
+        csd(history, scaling="psd")
+    with pytest.raises(ParameterError, match="detrend must be"):
+        csd(history, detrend="cubic")
