@@ -312,14 +312,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         return _build_beam(s, st, materials, source)
     if kind != "plate":
         raise ConfigError(f"structure.type: expected 'plate' or 'beam', got {kind!r}")
-    length = _number(st, "length", "structure.")
-    width = _number(st, "width", "structure.")
-    ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
-    unknown = set(st) - {"type", "length", "width", "layers", "shear_correction"}
-    if unknown:
-        raise ConfigError(f"structure: unknown keys {sorted(unknown)}; expected type, length, "
-                          "width, layers, shear_correction")
-    layers = _plies(st.get("layers"), materials, "structure.layers")
+    length, width, ks, layers = _base_section(st, materials)
 
     patches = []
     for i, p in enumerate(s.get("patches", [])):
@@ -398,10 +391,8 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
             from err
 
 
-def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
-    """The ``type = "beam"`` branch of :func:`build_model`."""
-    from ._beam import BeamPatch, cantilever_beam
-
+def _base_section(st: Mapping, materials: Mapping) -> tuple[float, float, float, list[Ply]]:
+    """Length, width (m), shear correction and base plies of the ``[structure]`` table."""
     length = _number(st, "length", "structure.")
     width = _number(st, "width", "structure.")
     ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
@@ -409,7 +400,14 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if unknown:
         raise ConfigError(f"structure: unknown keys {sorted(unknown)}; expected type, length, "
                           "width, layers, shear_correction")
-    layers = _plies(st.get("layers"), materials, "structure.layers")
+    return length, width, ks, _plies(st.get("layers"), materials, "structure.layers")
+
+
+def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
+    """The ``type = "beam"`` branch of :func:`build_model`."""
+    from ._beam import BeamPatch, cantilever_beam
+
+    length, width, ks, layers = _base_section(st, materials)
     patches = []
     for i, p in enumerate(s.get("patches", [])):
         w = f"patches[{i}]."
