@@ -204,6 +204,8 @@ def main() -> None:
                   f"peak RSS per worker {peak:.0f} MB, "
                   f"f1 mean {tab.mean_hz[0]:.3f} Hz CoV {tab['cov'][0]:.4f}")
         print(f"Monte Carlo speed-up 2 vs 1 worker: {times[1] / times[2]:.2f}")
+        # f ~ sqrt(E / rho): first-order CoV(f) = sqrt((CoV_E / 2)^2 + (CoV_rho / 2)^2)
+        print(f"closed-form first-order CoV(f): {np.hypot(0.03 / 2, 0.01 / 2):.4f}")
 
 
 if __name__ == "__main__":

@@ -38,6 +38,7 @@ class _FileMeta:
     start_time: str
     attrs: dict = field(default_factory=dict)
     data: object = None  # dask array (channel, time), set after the pass
+    handle: object = None  # the lazily opened xarray.Dataset (closed if the file is dropped)
 
 
 def _expand(paths_or_glob) -> list[str]:
@@ -171,8 +172,10 @@ def _open_one(path: str, fmt: str | None, options: dict, time_chunk: int):
     try:
         meta = _meta_from_dataarray(path, "netcdf", ds["time_history"], dict(ds.attrs))
     except MvtkError as err:
+        ds.close()
         return None, f"{type(err).__name__}: {err}"
     meta.data = ds["time_history"].transpose("channel", "time").data
+    meta.handle = ds
     return meta, None
 
 
@@ -303,10 +306,15 @@ def open_campaign(
             reason = _mismatch(m, ref, concat)
             if reason is not None:
                 bad[p] = reason
+                if m.handle is not None:
+                    m.handle.close()
                 del metas[p]
     good = [p for p in paths if p in metas]
     bad_list = [(p, bad[p]) for p in paths if p in bad]
     if bad_list and (on_error == "raise" or not good):
+        for m in metas.values():
+            if m.handle is not None:
+                m.handle.close()
         lines = "\n".join(f"  {p}: {r}" for p, r in bad_list)
         what = "no usable file" if not good else f"{len(bad_list)} of {len(paths)} files are bad"
         raise FormatError(
