@@ -12,6 +12,8 @@ Entry points
     Chunked Welch PSD equal to :func:`mvtk.signal.psd` on the same data.
 ``csd(x, reference, fs, window, nperseg, noverlap, detrend, scaling, *, compute)``
     Chunked Welch cross-spectral matrix equal to :func:`mvtk.signal.csd`.
+``frf(x, reference, response, *, estimator, fs, window, nperseg, noverlap, detrend)``
+    H1/H2 FRFs and coherence (random excitation) equal to :func:`mvtk.signal.frf`.
 ``map_channels(func, x, *, output_dims, output_sizes, output_dtype, kwargs)``
     Per-channel estimators through ``xarray.apply_ufunc(dask="parallelized")``.
 ``parameter_study(description, samples, *, builder, n_modes, client, on_error)``
@@ -29,7 +31,7 @@ See ``docs/scaling.md`` for running the same code on a remote cluster.
 from ._campaign import DEFAULT_TIME_CHUNK, open_campaign
 from ._jacobian import eigen_sensitivity
 from ._plot import plot_fn_histogram
-from ._spectral import csd, map_channels, psd
+from ._spectral import csd, frf, map_channels, psd
 from ._study import (
     DISTRIBUTION_KINDS,
     MonteCarloResult,
@@ -45,6 +47,7 @@ __all__ = [
     "MonteCarloResult",
     "draw_samples",
     "eigen_sensitivity",
+    "frf",
     "map_channels",
     "monte_carlo",
     "open_campaign",

@@ -180,3 +180,59 @@ def test_csd_bad_inputs(history):
         csd(history, scaling="psd")
     with pytest.raises(ParameterError, match="detrend must be"):
         csd(history, detrend="cubic")
+
+
+@pytest.fixture
+def shaker(rng):
+    n = 20_000
+    force = rng.standard_normal(n)
+    b, a = scipy.signal.butter(2, 0.1)
+    y1 = scipy.signal.lfilter(b, a, force) + 0.01 * rng.standard_normal(n)
+    y2 = scipy.signal.lfilter([1, 0.5], [1, -0.3], force)
+    return mvtk.io.time_history(np.vstack([force, y1, y2]), FS, channels=["F", "a1", "a2"],
+                                units=["N", "m/s^2", "m/s^2"])
+
+
+@pytest.mark.parametrize(
+    "kwargs, rtol",
+    [({"reference": "F", "nperseg": 512}, 1e-10),
+     ({"reference": "F", "estimator": "H2", "nperseg": 1000, "noverlap": 300}, 1e-10),
+     ({"reference": ["F", "a2"], "response": "a1", "nperseg": 256}, 1e-8)],  # 2x2 solve
+)
+def test_chunked_frf_equals_in_memory_frf(shaker, kwargs, rtol):
+    from mvtk.scale import frf
+
+    ref = mvtk.signal.frf(shaker, **kwargs)
+    out = frf(shaker.chunk({"time": 3000}), **kwargs)
+    scale = np.abs(ref["frf"].values).max()
+    np.testing.assert_allclose(out["frf"].values, ref["frf"].values, rtol=rtol,
+                               atol=rtol * scale)
+    np.testing.assert_allclose(out["coherence"].values, ref["coherence"].values, atol=1e-12)
+    assert out.attrs == ref.attrs
+    assert list(out.coords) == list(ref.coords)
+    np.testing.assert_array_equal(out["units"].values, ref["units"].values)
+
+
+def test_frf_per_record(shaker):
+    from mvtk.scale import frf
+
+    stacked = xr.concat([shaker, shaker * 3.0], dim="record").chunk({"time": 4000})
+    out = frf(stacked, "F", nperseg=512)
+    assert out["frf"].dims == ("record", "response", "reference", "frequency")
+    ref = mvtk.signal.frf(shaker, "F", nperseg=512)
+    for i in range(2):  # scaling every channel by 3 leaves the FRF unchanged
+        np.testing.assert_allclose(out["frf"].isel(record=i).values, ref["frf"].values,
+                                   rtol=1e-10, atol=1e-12)
+
+
+def test_frf_bad_inputs(shaker):
+    from mvtk.scale import frf
+
+    with pytest.raises(ParameterError, match="estimator must be 'H1' or 'H2', got 'H3'"):
+        frf(shaker, "F", estimator="H3")
+    with pytest.raises(ParameterError, match="'H2' needs exactly one reference, got 2"):
+        frf(shaker, ["F", "a1"], estimator="H2")
+    with pytest.raises(ParameterError, match="every channel is a reference"):
+        frf(shaker, ["F", "a1", "a2"])
+    with pytest.raises(ParameterError, match="reference: no channel matches"):
+        frf(shaker, {"quantity": "pressure"})
