@@ -188,3 +188,24 @@ def test_import_does_not_import_dask_or_matplotlib():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_every_dask_function_names_the_pip_command_without_dask(monkeypatch, rng):
+    import mvtk.scale
+
+    th = mvtk.io.time_history(rng.standard_normal((2, 64)), FS, channels=CHANNELS, units="V")
+    monkeypatch.setitem(sys.modules, "dask", None)
+    for name, call in [("mvtk.scale.psd", lambda: mvtk.scale.psd(th)),
+                       ("mvtk.scale.csd", lambda: mvtk.scale.csd(th)),
+                       ("mvtk.scale.frf", lambda: mvtk.scale.frf(th, "a")),
+                       ("mvtk.scale.map_channels", lambda: mvtk.scale.map_channels(np.std, th))]:
+        with pytest.raises(MissingDependencyError, match=rf"{name} needs dask.*pip install"):
+            call()
+
+
+def test_cluster_without_distributed_names_the_pip_command(monkeypatch):
+    import mvtk.scale
+
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)
+    with pytest.raises(MissingDependencyError, match=r"needs dask.distributed.*pip install"):
+        mvtk.scale.parameter_study({"materials": {}}, {"materials": [1.0]}, client="local")
