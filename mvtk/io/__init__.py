@@ -82,6 +82,7 @@ UFF record or TDMS segment is refused unless ``allow_truncated=True`` is passed.
 
 from __future__ import annotations
 
+from ._campaign import open_campaign
 from ._containers import (
     read_hdf5,
     read_mat,
@@ -109,6 +110,7 @@ from ._validate import validate
 
 __all__ = [
     "read",
+    "open_campaign",
     "write",
     "validate",
     "time_history",

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._optional import require_dask
 from ..errors import DataRepairWarning, FormatError, MvtkError, ParameterError
-from ._deps import require_dask
 
 __all__ = ["open_campaign", "DEFAULT_TIME_CHUNK"]
 

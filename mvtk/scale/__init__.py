@@ -28,7 +28,7 @@ Entry points
 See ``docs/scaling.md`` for running the same code on a remote cluster.
 """
 
-from ._campaign import DEFAULT_TIME_CHUNK, open_campaign
+from ..io._campaign import DEFAULT_TIME_CHUNK, open_campaign
 from ._jacobian import eigen_sensitivity
 from ._plot import plot_fn_histogram
 from ._spectral import csd, frf, map_channels, psd

@@ -6,8 +6,8 @@ import numpy as np
 import scipy.fft
 import scipy.signal
 
+from .._optional import require_dask
 from ..errors import DimensionError, FormatError, ParameterError
-from ._deps import require_dask
 
 __all__ = ["psd", "csd", "frf", "map_channels"]
 

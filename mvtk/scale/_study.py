@@ -11,8 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .._optional import require_distributed
 from ..errors import DataRepairWarning, MvtkError, ParameterError
-from ._deps import require_distributed
 
 __all__ = [
     "parameter_study",
