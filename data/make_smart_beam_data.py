@@ -63,18 +63,27 @@ import numpy as np
 from scipy import signal
 
 SEED = 20261122
-FS_SIM = 2048.0  # Hz, simulation rate
+FS_SIM = 2048.0  # Hz, simulation rate of the long tests
 DECIMATE = 16  # -> 128 Hz stored
 FS_OUT = FS_SIM / DECIMATE
 AA_CUTOFF_HZ = 50.0
 AA_ORDER = 8
+# short broadband impact test (higher modes for the Chowdhury pair)
+FS_SIM_BB = 20000.0  # Hz
+DECIMATE_BB = 16  # -> 1250 Hz stored (1/fs = 8e-4 s exactly in the UFF header)
+FS_OUT_BB = FS_SIM_BB / DECIMATE_BB
+AA_CUTOFF_BB_HZ = 400.0
+N_HITS_BB, RECORD_BB_S, PULSE_BB_S = 3, 8.0, 0.5e-3
 
 # Rayleigh pair of the paper's measured damping (PHYSICS.md section 2)
 ZETA1, F1 = 5.84e-4, 13.26
 ZETA2, F2 = 1.32e-3, 41.14
 
-# Truth geometry used for the mode-shape values (an explicit assumption, see docstring)
-LENGTH, WIDTH, MASS_PER_AREA = 0.180, 0.133, 4.0  # m, m, kg/m^2
+# The SYNTHETIC specimen: the nominal structure file with these two values (what the
+# study's model updating should recover; study.toml [truth])
+STRUCTURE = Path(__file__).resolve().parent / "structures" / "smart_beam.toml"
+TRUTH = {"materials.steel.E": 212.57e9, "boundary.clamp_stiffness": 383.3}
+N_TRUTH_MODES = 12  # FE modes superposed (up to about 420 Hz)
 IMPACT_XY = (0.170, 0.110)  # m
 SENSOR_XY = (0.180, 0.020)  # m (tip sensor, off the centre line so torsion is seen)
 TIP_XY = (0.180, 0.0665)  # m (laser on the tip centre line for the free decay)
@@ -105,44 +114,51 @@ def rayleigh_zeta(fn_hz: float, alpha: float, beta: float) -> float:
     return alpha / (2 * w) + beta * w / 2
 
 
-def _bending_shape(n: int, x: float) -> float:
-    """Cantilever beam function normalised to int_0^L phi^2 dx = L."""
-    bl = (1.87510407, 4.69409113, 7.85475744)[n]
-    b = bl / LENGTH
-    s = (np.cosh(bl) + np.cos(bl)) / (np.sinh(bl) + np.sin(bl))
-    return float(np.cosh(b * x) - np.cos(b * x) - s * (np.sinh(b * x) - np.sin(b * x)))
+def truth_model():
+    """The truth FE model: the nominal structure file with the :data:`TRUTH` values."""
+    from mvtk.fe import build_model, load_structure, set_by_path
+
+    desc = load_structure(STRUCTURE)
+    for path, value in TRUTH.items():
+        desc = set_by_path(desc, path, value, create=True)
+    return build_model(desc)
 
 
-def _torsion_shape(k: int, x: float, y: float) -> float:
-    """sin((2k+1) pi x / 2L) (y - b/2), not normalised."""
-    return float(np.sin((2 * k + 1) * np.pi * x / (2 * LENGTH)) * (y - WIDTH / 2))
+def truth_modes(n_modes: int = N_TRUTH_MODES) -> list[Mode]:
+    """The truth structure's lowest FE modes with the paper's Rayleigh damping.
 
-
-def truth_modes() -> list[Mode]:
-    """The truth structure's modes below the anti-aliasing cut-off and just above it.
-
-    Bending modes: f_n = f1 (beta_n L / beta_1 L)^2; torsion modes: f = (2k+1) f2.
-    Mass normalisation over the strip: bending phi(x) / sqrt(m), torsion with
-    ``int int m_A phi^2 = 1``.
+    Mass-normalised shape values (uz, 1/sqrt(kg)) at the FE nodes nearest to the impact
+    point, the tip sensor and the laser point; each mode's sign is chosen so that its
+    value at the sensor is >= 0 (output independent of the eigensolver's sign choice).
     """
+    from mvtk.fe import modal_analysis
+
+    model = truth_model()
+    res = modal_analysis(model, n_modes)
     alpha, beta = rayleigh_pair()
-    m_total = MASS_PER_AREA * LENGTH * WIDTH
-    ratios = np.array([1.87510407, 4.69409113, 7.85475744]) ** 2 / 1.87510407**2
+    rows = {key: model.dof_index(model.nearest_node([x, y, 0.0]), "uz")
+            for key, (x, y) in (("force", IMPACT_XY), ("sensor", SENSOR_XY),
+                                ("tip", TIP_XY))}
+    # the iterative eigensolver differs from run to run in the last digits: frequencies
+    # to 8 significant digits and shape values (order 1-10 1/sqrt(kg)) to 1e-7 make the
+    # files reproducible bit for bit (and set the numerical zeros of torsion modes on
+    # the centre line to 0)
+    def sig8(x: float) -> float:
+        return float(f"{x:.8g}")
+
+    def shape(x: float) -> float:
+        return round(x, 7) + 0.0
+
     modes = []
-    # torsion norm: int sin^2 = L/2, int (y - b/2)^2 dy = b^3/12
-    c_t = 1.0 / np.sqrt(MASS_PER_AREA * (LENGTH / 2) * WIDTH**3 / 12)
-    table = [("bending 1", F1, "b", 0), ("torsion 1", F2, "t", 0),
-             ("bending 2", F1 * ratios[1], "b", 1), ("torsion 2", 3 * F2, "t", 1),
-             ("bending 3", F1 * ratios[2], "b", 2)]
-    for name, fn, kind, n in table:
-        if kind == "b":
-            def shape(xy, n=n):
-                return _bending_shape(n, xy[0]) / np.sqrt(m_total)
-        else:
-            def shape(xy, n=n):
-                return c_t * _torsion_shape(n, xy[0], xy[1])
-        modes.append(Mode(name, fn, rayleigh_zeta(fn, alpha, beta),
-                          shape(IMPACT_XY), shape(SENSOR_XY), shape(TIP_XY)))
+    for i, fn in enumerate(res.fn_hz):
+        phi = res.shapes[:, i]
+        sign = 1.0 if phi[rows["sensor"]] >= 0 else -1.0
+        fn = sig8(float(fn))
+        modes.append(Mode(f"mode {i + 1} ({res.mode_type[i]})", fn,
+                          rayleigh_zeta(fn, alpha, beta),
+                          shape(sign * float(phi[rows["force"]])),
+                          shape(sign * float(phi[rows["sensor"]])),
+                          shape(sign * float(phi[rows["tip"]]))))
     return modes
 
 
@@ -155,22 +171,26 @@ def _modal_filter(mode: Mode, quantity: str, dt: float):
     return np.ravel(b), np.ravel(a)
 
 
-def _anti_alias_and_decimate(x: np.ndarray) -> np.ndarray:
-    sos = signal.butter(AA_ORDER, AA_CUTOFF_HZ, fs=FS_SIM, output="sos")
-    return signal.sosfilt(sos, x)[::DECIMATE]
+def _anti_alias_and_decimate(x: np.ndarray, fs_sim: float = FS_SIM,
+                             cutoff_hz: float = AA_CUTOFF_HZ,
+                             decimate: int = DECIMATE) -> np.ndarray:
+    sos = signal.butter(AA_ORDER, cutoff_hz, fs=fs_sim, output="sos")
+    return signal.sosfilt(sos, x)[::decimate]
 
 
 def impact_test(rng: np.random.Generator, modes: list[Mode], n_hits: int = 3,
-                record_s: float = 128.0):
-    """Force (N) and tip acceleration (m/s^2) at FS_OUT, SYNTHETIC."""
-    n = int(round((n_hits * record_s + 4.0) * FS_SIM))
-    dt = 1.0 / FS_SIM
+                record_s: float = 128.0, fs_sim: float = FS_SIM,
+                cutoff_hz: float = AA_CUTOFF_HZ, decimate: int = DECIMATE,
+                pulse_s: float = 1.5e-3):
+    """Force (N) and tip acceleration (m/s^2) at ``fs_sim / decimate``, SYNTHETIC."""
+    n = int(round((n_hits * record_s + 4.0) * fs_sim))
+    dt = 1.0 / fs_sim
     force = np.zeros(n)
-    pulse_t = np.arange(int(round(1.5e-3 * FS_SIM)) + 1) * dt
+    pulse_t = np.arange(int(round(pulse_s * fs_sim)) + 1) * dt
     hit_times = []
     for k in range(n_hits):
         t0 = k * record_s + 2.0 + rng.uniform(-0.05, 0.05)
-        i0 = int(round(t0 * FS_SIM))
+        i0 = int(round(t0 * fs_sim))
         amp = 5.0 * rng.uniform(0.8, 1.2)
         force[i0:i0 + pulse_t.size] += amp * np.sin(np.pi * pulse_t / pulse_t[-1])
         hit_times.append(i0 * dt)
@@ -180,7 +200,8 @@ def impact_test(rng: np.random.Generator, modes: list[Mode], n_hits: int = 3,
         acc += m.phi_force * m.phi_sensor * signal.lfilter(b, a, force)
     force_meas = force + rng.normal(0.0, 0.005, n)  # N, hammer noise
     acc_meas = acc + rng.normal(0.0, 0.01, n)  # m/s^2, accelerometer noise
-    return (_anti_alias_and_decimate(force_meas), _anti_alias_and_decimate(acc_meas),
+    return (_anti_alias_and_decimate(force_meas, fs_sim, cutoff_hz, decimate),
+            _anti_alias_and_decimate(acc_meas, fs_sim, cutoff_hz, decimate),
             np.array(hit_times))
 
 
@@ -195,9 +216,10 @@ def free_decay(rng: np.random.Generator, modes: list[Mode], duration_s: float = 
     disp = np.zeros_like(t)
     acc = np.zeros_like(t)
     q1 = tip_amplitude / modes[0].phi_tip  # modal amplitude of mode 1 (sqrt(kg) m)
-    amplitudes = {"bending 1": q1, "torsion 1": 0.01 * q1}
-    for m in modes:
-        q0 = amplitudes.get(m.name, 0.0)
+    # mode 1, and mode 2 (torsion 1) left over at 1 % of the mode-1 modal amplitude
+    amplitudes = {0: q1, 1: 0.01 * q1}
+    for i, m in enumerate(modes):
+        q0 = amplitudes.get(i, 0.0)
         if q0 == 0.0:
             continue
         w = 2 * np.pi * m.fn_hz
@@ -215,10 +237,10 @@ def free_decay(rng: np.random.Generator, modes: list[Mode], duration_s: float = 
 
 
 def _csv(path: Path, header: list[str], columns: dict[str, np.ndarray],
-         quantity: list[str], node: list[int]) -> None:
+         quantity: list[str], node: list[int], fs: float = FS_OUT) -> None:
     """CSV: '#' metadata lines, per-channel quantity/node rows, 'name [unit]' header."""
     n = len(next(iter(columns.values())))
-    time = np.arange(n) / FS_OUT
+    time = np.arange(n) / fs
     data = np.column_stack([time, *columns.values()])
     lines = [f"# {h}" for h in header]
     lines.append("# quantity: " + ", ".join(quantity))
@@ -229,7 +251,7 @@ def _csv(path: Path, header: list[str], columns: dict[str, np.ndarray],
         np.savetxt(fh, data, delimiter=",", fmt=["%.7f"] + ["%.5e"] * len(columns))
 
 
-def _uff(path: Path, title: str, channels: list[dict]) -> None:
+def _uff(path: Path, title: str, channels: list[dict], fs: float = FS_OUT) -> None:
     import pyuff
 
     if path.exists():
@@ -243,14 +265,14 @@ def _uff(path: Path, title: str, channels: list[dict]) -> None:
             id3=f"simulated by data/make_smart_beam_data.py (seed {SEED})",
             id4="NOT A MEASUREMENT", id5="mvtk example data",
             func_type=1, rsp_node=ch["node"], rsp_dir=3, ref_node=ch["ref_node"], ref_dir=3,
-            data=data, x=np.arange(data.size) / FS_OUT,
+            data=data, x=np.arange(data.size) / fs,
             ordinate_spec_data_type=ch["spec_data_type"], abscissa_spec_data_type=17,
             ordinate_len_unit_exp=0 if ch["units"] == "N" else 1,
             ordinate_force_unit_exp=1 if ch["units"] == "N" else 0,
             orddenom_spec_data_type=0, z_axis_spec_data_type=0,
             ordinate_axis_units_lab=ch["units"], abscissa_axis_units_lab="s",
             rsp_ent_name="beam", ref_ent_name="beam", ver_num=0, load_case_id=0,
-            ord_data_type=4, abscissa_spacing=1, abscissa_min=0.0, abscissa_inc=1.0 / FS_OUT,
+            ord_data_type=4, abscissa_spacing=1, abscissa_min=0.0, abscissa_inc=1.0 / fs,
             z_axis_value=0.0, orddenom_len_unit_exp=0, orddenom_force_unit_exp=0,
             orddenom_temp_unit_exp=0, orddenom_axis_units_lab="NONE",
             z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0,
@@ -269,38 +291,56 @@ def main(out_dir: Path) -> list[Path]:
     out_dir.mkdir(parents=True, exist_ok=True)
     force, acc, hits = impact_test(rng, modes)
     disp_d, acc_d = free_decay(rng, modes)
+    force_bb, acc_bb, hits_bb = impact_test(
+        rng, modes, n_hits=N_HITS_BB, record_s=RECORD_BB_S, fs_sim=FS_SIM_BB,
+        cutoff_hz=AA_CUTOFF_BB_HZ, decimate=DECIMATE_BB, pulse_s=PULSE_BB_S)
     common = [
         "SYNTHETIC DATA - simulated, not measured (mvtk example files)",
         f"generator: data/make_smart_beam_data.py, seed {SEED}",
-        "structure: truth smart beam (compliant clamp, steel E 212.6 GPa), see script docstring",
-        f"sampling_rate_hz: {FS_OUT:g}",
-        f"anti_alias: Butterworth order {AA_ORDER}, {AA_CUTOFF_HZ:g} Hz, both channels",
-        "truth modes: " + "; ".join(f"{m.name} {m.fn_hz:.3f} Hz zeta {m.zeta:.3e}"
-                                    for m in modes),
+        "structure: truth smart beam (FE model of data/structures/smart_beam.toml with "
+        "clamp_stiffness 383.3 N m/rad/m, steel E 212.57 GPa), see script docstring",
     ]
+    truth = ("truth modes: " + "; ".join(f"{m.name} {m.fn_hz:.3f} Hz zeta {m.zeta:.3e}"
+                                         for m in modes))
+    slow = [f"sampling_rate_hz: {FS_OUT:g}",
+            f"anti_alias: Butterworth order {AA_ORDER}, {AA_CUTOFF_HZ:g} Hz, both channels",
+            truth]
+    fast = [f"sampling_rate_hz: {FS_OUT_BB:g}",
+            f"anti_alias: Butterworth order {AA_ORDER}, {AA_CUTOFF_BB_HZ:g} Hz, both channels",
+            truth]
+    impact_channels = ("channels: force (node 1, impact at x=170 mm y=110 mm, +z), "
+                       "tip_accel (node 5, tip sensor at x=180 mm y=20 mm, +z)")
     written = []
     p = out_dir / "SYNTHETIC_smart_beam_impact.csv"
-    _csv(p, ["SYNTHETIC impact test: 3 hammer hits, records of 128 s", *common,
-             "hit_times_s: " + " ".join(f"{h:.4f}" for h in hits),
-             "channels: force (node 1, impact at x=170 mm y=110 mm, +z), "
-             "tip_accel (node 5, tip sensor at x=180 mm y=20 mm, +z)"],
+    _csv(p, ["SYNTHETIC impact test: 3 hammer hits, records of 128 s", *common, *slow,
+             "hit_times_s: " + " ".join(f"{h:.4f}" for h in hits), impact_channels],
          {"force [N]": force, "tip_accel [m/s^2]": acc}, ["force", "acceleration"], [1, 5])
     written.append(p)
     p = out_dir / "SYNTHETIC_smart_beam_decay.csv"
-    _csv(p, ["SYNTHETIC free decay from mode 1 (release at t = 0)", *common,
+    _csv(p, ["SYNTHETIC free decay from mode 1 (release at t = 0)", *common, *slow,
              "channels: tip_disp (node 6, laser on tip centre x=180 mm y=66.5 mm, +z), "
              "tip_accel (node 5, x=180 mm y=20 mm, +z)"],
          {"tip_disp [m]": disp_d, "tip_accel [m/s^2]": acc_d}, ["displacement", "acceleration"],
          [6, 5])
     written.append(p)
-    p = out_dir / "SYNTHETIC_smart_beam_impact.uff"
-    _uff(p, "impact test", [
-        {"name": "force", "data": force, "node": 1, "ref_node": 1, "spec_data_type": 13,
-         "units": "N"},
-        {"name": "tip acceleration", "data": acc, "node": 5, "ref_node": 1,
-         "spec_data_type": 12, "units": "m/s^2"},
-    ])
+    p = out_dir / "SYNTHETIC_smart_beam_broadband.csv"
+    _csv(p, [f"SYNTHETIC broadband impact test: {N_HITS_BB} hammer hits "
+             f"({PULSE_BB_S * 1e3:g} ms), records of {RECORD_BB_S:g} s", *common, *fast,
+             "hit_times_s: " + " ".join(f"{h:.4f}" for h in hits_bb), impact_channels],
+         {"force [N]": force_bb, "tip_accel [m/s^2]": acc_bb}, ["force", "acceleration"],
+         [1, 5], fs=FS_OUT_BB)
     written.append(p)
+    for name, title, fs, f_, a_ in (("impact", "impact test", FS_OUT, force, acc),
+                                    ("broadband", "broadband impact test", FS_OUT_BB,
+                                     force_bb, acc_bb)):
+        p = out_dir / f"SYNTHETIC_smart_beam_{name}.uff"
+        _uff(p, title, [
+            {"name": "force", "data": f_, "node": 1, "ref_node": 1, "spec_data_type": 13,
+             "units": "N"},
+            {"name": "tip acceleration", "data": a_, "node": 5, "ref_node": 1,
+             "spec_data_type": 12, "units": "m/s^2"},
+        ], fs=fs)
+        written.append(p)
     p = out_dir / "SYNTHETIC_smart_beam_decay.uff"
     _uff(p, "free decay", [
         {"name": "tip displacement", "data": disp_d, "node": 6, "ref_node": 0,

@@ -5,14 +5,18 @@ Schema (see ``data/smart_beam/study.toml`` for a complete, commented example)::
     [study]            name, synthetic (bool)
     [structure]        file (structure TOML, relative to the study file)
     [measurements.impact]  file, reference, response, record_s, force_window_s
+    [measurements.broadband]  same keys as impact: a short broadband impact test for the
+                       higher modes (its modes are listed in damping.broadband_fn_hz)
     [measurements.decay]   file, channel, band_hz
-    [damping]          fn_hz, half_power_method, chowdhury_target_mass, model_damping
+    [damping]          fn_hz, broadband_fn_hz, half_power_method, chowdhury_target_mass,
+                       model_damping
     [fe]               n_modes
     [updating]         targets_hz, max_iter, [[updating.parameters]] path, initial,
                        lower, upper
-    [reduction]        n_modes, n_compare, [[reduction.retained]] name, xyz
-    [control]          actuator_nodes, sensor_node, initial_tip_displacement_m, t_end_s,
-                       fs_out, settle_band, [[control.controllers]] name, type, ...
+    [reduction]        n_modes, n_compare, plant_modes, [[reduction.retained]] name, xyz
+    [control]          actuator_nodes, sensor_node, patch, actuator_limit_v,
+                       initial_tip_displacement_m, t_end_s, fs_out, settle_band,
+                       [[control.controllers]] name, type, ... (gains and u_max in V)
     [checks]           tolerances (ratios or seconds), see :data:`CHECK_KEYS`
     [references]       published values shown next to mvtk's (experiment_fn_hz, fe_fn_hz,
                        se_fn_hz, fe4_fn_hz, zeta, half_power_alpha/beta,
@@ -147,15 +151,17 @@ def load_study(path: str | Path) -> Study:
     files: dict[str, Path] = {}
     meas = cfg.get("measurements", {})
     for key in meas:
-        if key not in ("impact", "decay"):
-            raise ConfigError(f"measurements.{key}: unknown test; expected 'impact' or 'decay'")
+        if key not in ("impact", "broadband", "decay"):
+            raise ConfigError(f"measurements.{key}: unknown test; expected 'impact', "
+                              "'broadband' or 'decay'")
         files[key] = _file(root, meas[key], f"measurements.{key}")
-    if "impact" in meas:
-        m = meas["impact"]
-        for k in ("reference", "response"):
-            if not isinstance(_need(m, k, "measurements.impact"), str):
-                raise ConfigError(f"measurements.impact.{k}: expected a channel name")
-        _number(m, "record_s", "measurements.impact")
+    for test in ("impact", "broadband"):
+        if test in meas:
+            m = meas[test]
+            for k in ("reference", "response"):
+                if not isinstance(_need(m, k, f"measurements.{test}"), str):
+                    raise ConfigError(f"measurements.{test}.{k}: expected a channel name")
+            _number(m, "record_s", f"measurements.{test}")
     if "decay" in meas:
         if not isinstance(_need(meas["decay"], "channel", "measurements.decay"), str):
             raise ConfigError("measurements.decay.channel: expected a channel name")
@@ -171,6 +177,20 @@ def load_study(path: str | Path) -> Study:
         if not (isinstance(fn, list) and fn and all(isinstance(v, int | float) and v > 0
                                                     for v in fn)):
             raise ConfigError(f"damping.fn_hz: expected a list of frequencies > 0, got {fn!r}")
+        bb = d.get("broadband_fn_hz", [])
+        if not (isinstance(bb, list) and all(isinstance(v, int | float) and v > 0
+                                             for v in bb)):
+            raise ConfigError(f"damping.broadband_fn_hz: expected a list of frequencies > 0, "
+                              f"got {bb!r}")
+        if bb and "broadband" not in meas:
+            raise ConfigError("damping.broadband_fn_hz needs a [measurements.broadband] test")
+        if bb and min(bb) <= max(fn):
+            raise ConfigError(f"damping.broadband_fn_hz: expected modes above those of "
+                              f"damping.fn_hz (max {max(fn)} Hz), got {bb!r}")
+        tm = _number(d, "chowdhury_target_mass", "damping", default=0.95)
+        if tm > 1:
+            raise ConfigError(f"damping.chowdhury_target_mass: expected a fraction in (0, 1], "
+                              f"got {tm!r}")
         md = d.get("model_damping", "half_power")
         if md not in ("half_power", "chowdhury"):
             raise ConfigError(f"damping.model_damping: expected 'half_power' or 'chowdhury', "
@@ -195,6 +215,9 @@ def load_study(path: str | Path) -> Study:
         n = r.get("n_modes", 10)
         if isinstance(n, bool) or not isinstance(n, int) or n < 0:
             raise ConfigError(f"reduction.n_modes: expected an integer >= 0, got {n!r}")
+        pm = r.get("plant_modes", 12)
+        if isinstance(pm, bool) or not isinstance(pm, int) or pm < 1:
+            raise ConfigError(f"reduction.plant_modes: expected an integer >= 1, got {pm!r}")
         retained = _need(r, "retained", "reduction")
         names = []
         for i, item in enumerate(retained):
@@ -222,6 +245,10 @@ def load_study(path: str | Path) -> Study:
             raise ConfigError("control.actuator_nodes: expected the two actuator-edge nodes")
         for key in ("initial_tip_displacement_m", "t_end_s", "fs_out", "settle_band"):
             _number(c, key, "control")
+        _number(c, "actuator_limit_v", "control", default=100.0)
+        if "patch" in c and not isinstance(c["patch"], str):
+            raise ConfigError(f"control.patch: expected a patch name of the structure file, "
+                              f"got {c['patch']!r}")
         for i, ctrl in enumerate(c.get("controllers", [])):
             where = f"control.controllers[{i}]"
             _need(ctrl, "name", where)

@@ -49,6 +49,15 @@ def study_checks(res: StudyResult) -> list[Check]:
             if i < len(zref):
                 checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[i],
                                     tol["identified_zeta_rel"], "", source=src))
+    truth_pair = _truth_rayleigh(res)
+    if hp and truth_pair:
+        for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
+            if i >= len(_ref(res, "zeta", [])) and np.isfinite([fn, z]).all():
+                w = 2 * np.pi * fn
+                checks.append(Check(f"identified zeta{i + 1} at {fn:.1f} Hz vs SYNTHETIC truth",
+                                    z, truth_pair[0] / (2 * w) + truth_pair[1] * w / 2,
+                                    tol["identified_zeta_rel"], "",
+                                    source="data/make_smart_beam_data.py"))
     env = dmp.get("envelope")
     zref = _ref(res, "zeta", [])
     if env and zref:
@@ -95,12 +104,24 @@ def study_checks(res: StudyResult) -> list[Check]:
                 checks.append(Check(f"{name} settling time", row["settling_time_s"],
                                     tol["ppf_settling_s"], 0.0, "s", kind="upper",
                                     source="study tolerance"))
+            if "peak_voltage_V" in row:
+                checks.append(Check(f"{name} peak voltage within the PIC 151 limit",
+                                    row["peak_voltage_V"], ctl["actuator_limit_v"], 0.0, "V",
+                                    kind="upper", source="study control.actuator_limit_v"))
             z = row["zeta_mode1"]
             if z is not None and not (isinstance(z, float) and math.isnan(z)):
                 checks.append(Check(f"{name} closed-loop zeta of mode 1", z,
                                     tol["closed_loop_zeta_min"], 0.0, "", kind="lower",
                                     source="study tolerance"))
     return checks
+
+
+def _truth_rayleigh(res: StudyResult) -> tuple[float, float] | None:
+    """(alpha, beta) of the SYNTHETIC truth (``[truth] rayleigh_alpha/beta``), if given."""
+    truth = res.study.config.get("truth") or {}
+    if "rayleigh_alpha" in truth and "rayleigh_beta" in truth:
+        return float(truth["rayleigh_alpha"]), float(truth["rayleigh_beta"])
+    return None
 
 
 def _section_run(rep: Report, res: StudyResult) -> None:
@@ -136,55 +157,94 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
     rows = []
     hp = d.get("half_power")
     n = len(hp["fn_hz"]) if hp else 1
+    tests = hp.get("test", ["impact"] * n) if hp else []
+    truth_pair = _truth_rayleigh(res)
     for i in range(n):
         row = {"mode": i + 1}
         if hp:
-            row.update({"fn_hz (half-power)": hp["fn_hz"][i], "zeta half-power": hp["zeta"][i],
+            row.update({"test": tests[i], "fn_hz (half-power)": hp["fn_hz"][i],
+                        "zeta half-power": hp["zeta"][i],
                         "lines in band": hp["n_lines"][i], "quality": hp["quality"][i]})
         if i == 0 and d.get("envelope"):
             row["zeta envelope fit"] = d["envelope"]["zeta"][0]
             row["zeta log decrement"] = d["log_decrement"]["zeta"][0]
-        for meth in ("half_power", "chowdhury"):
+        for meth in ("half_power", "least_squares", "chowdhury"):
             r = d.get(f"rayleigh_{meth}", {})
             if "zeta_fit" in r and i < len(r["zeta_fit"]):
                 row[f"zeta Rayleigh ({meth})"] = r["zeta_fit"][i]
         if i < len(zref):
             row["zeta paper"] = zref[i]
+        if truth_pair and hp:
+            w = 2 * np.pi * hp["fn_hz"][i]
+            row["zeta SYNTHETIC truth"] = truth_pair[0] / (2 * w) + truth_pair[1] * w / 2
         rows.append(row)
-    sec.table(pd.DataFrame(rows), "damping_per_mode", "Identified damping per mode",
-              passed_column=None)
+    sec.table(pd.DataFrame(rows), "damping_per_mode",
+              "Identified damping per mode (modes 1-2 from the long impact test, the "
+              "higher ones from the short broadband test)", passed_column=None)
     rows = []
-    for meth, label in (("half_power", "half-power"), ("chowdhury", "Chowdhury")):
+    ch = d.get("rayleigh_chowdhury", {})
+    ls = d.get("rayleigh_least_squares", {})
+    for meth, label, note in (
+            ("half_power", "half-power (two-mode fit, modes 1 and 2)", ""),
+            ("least_squares", f"least squares over all {ls.get('n_modes', '')} identified "
+                              "modes", ls.get("error", "")),
+            ("chowdhury", "Chowdhury" + (f" (anchors: modes {ch['anchors'][0] + 1} and "
+                                         f"{ch['anchors'][1] + 1})" if "anchors" in ch
+                                         else ""),
+             ch.get("error", ch.get("note", "")))):
         r = d.get(f"rayleigh_{meth}", {})
         rows.append({"method": label, "alpha [1/s]": r.get("alpha", float("nan")),
                      "beta [s]": r.get("beta", float("nan")),
                      "alpha paper": _ref(res, f"{meth}_alpha", float("nan")),
                      "beta paper": _ref(res, f"{meth}_beta", float("nan")),
-                     "note": r.get("error", "")})
+                     "note": note})
     sec.table(pd.DataFrame(rows), "table3_rayleigh", "Table 3: Rayleigh alpha and beta",
               passed_column=None)
-    ch = d.get("rayleigh_chowdhury", {})
     if "error" in ch:
         sec.text("Chowdhury pair not computed: its anchor rule (mode 1 and the lowest mode at "
                  "which the cumulative effective mass reaches the target) needs more "
-                 "identified modes than the test provides. With two identified modes any "
-                 "anchor choice is modes 1 and 2, i.e. the half-power pair; the paper's "
-                 "Chowdhury pair rests on damping ratios the paper does not give.")
+                 "identified modes than the tests provide. With two identified modes any "
+                 "anchor choice is modes 1 and 2, i.e. the half-power pair.")
     if "anchors" in ch:
-        sec.text("Chowdhury anchors (0-based identified modes): "
-                 f"{ch['anchors']}; effective mass fractions (uz) of the paired nominal FE "
-                 f"modes: {', '.join(f'{v:.3f}' for v in ch['mass_fraction'])}.")
+        pair = ch["pairing"]
+        sec.text(f"Chowdhury pair: anchors at identified modes {ch['anchors'][0] + 1} and "
+                 f"{ch['anchors'][1] + 1}; target cumulative effective mass "
+                 f"{ch['target_mass']:g} (paper), used {ch['target_used']:.3f}; the "
+                 f"identified modes hold {ch['mass_reached']:.3f} of the effective mass (uz) "
+                 "of the FE model used for the SE (updated when updating ran), each paired "
+                 "with the FE mode nearest in frequency. " + (ch["note"] + ". " if ch["note"]
+                                                              else "")
+                 + "The paper's Chowdhury pair rests on damping ratios the paper does not "
+                 "give, so it is not expected to be reproduced.")
+        sec.table(pd.DataFrame({
+            "identified mode": [a + 1 for a in range(len(pair["fe_mode"]))],
+            "FE mode": pair["fe_mode"], "FE fn_hz": pair["fe_fn_hz"],
+            "pairing error (rel)": pair["pair_error_rel"],
+            "mass fraction uz": pair["mass_fraction"],
+            "cumulative": np.cumsum(pair["mass_fraction"])}),
+            "chowdhury_pairing", "Identified modes paired with FE modes (effective mass)",
+            passed_column=None)
     md = d.get("model_damping")
     if md:
         sec.text(f"Rayleigh pair used for the SE and the controllers: {md['method']} "
                  f"(alpha = {md['alpha']:.5g} 1/s, beta = {md['beta']:.5g} s).")
     for w in d.get("half_power_warnings", []) + d.get("decay_warnings", []):
         sec.note(w, kind="unavailable")
+    def _bands(test: str):
+        if not hp:
+            return []
+        return [(a, b, c) for a, b, c, t in zip(hp["f1_hz"], hp["f2_hz"], hp["fn_hz"], tests)
+                if t == test and np.isfinite([a, b, c]).all()]
+
+    if arr is not None and "frf_abs_bb" in arr:
+        sec.figure(plot_frf(arr["frequency_bb"].values, arr["frf_abs_bb"].values,
+                            bands=_bands("broadband"), f_range=(5.0, 400.0),
+                            ylabel=f"|H| [{d.get('frf_units', '')}]",
+                            title="Broadband impact FRF (H1) with half-power bands"),
+                   "Short broadband impact test: FRF up to the anti-aliasing cut-off with the "
+                   "half-power bands of the higher identified modes (shaded).")
     if arr is not None and "frf_abs" in arr:
-        bands = []
-        if hp:
-            bands = [(a, b, c) for a, b, c in zip(hp["f1_hz"], hp["f2_hz"], hp["fn_hz"])
-                     if np.isfinite([a, b, c]).all()]
+        bands = _bands("impact")
         sec.figure(plot_frf(arr["frequency"].values, arr["frf_abs"].values, bands=bands,
                             ylabel=f"|H| [{d.get('frf_units', '')}]",
                             title="Impact FRF (H1) with half-power bands"),
@@ -312,10 +372,30 @@ def _section_control(rep: Report, res: StudyResult) -> None:
         return
     c = res.results["control"]
     cfg = res.study.config["control"]
+    act = (res.results.get("reduction") or {}).get("actuator")
+    if act:
+        sec.text(
+            f"Actuator input: the voltage of patch '{act['name']}' (V). Moment per volt "
+            f"(paper eqs. 3-6 integrated over the steel/epoxy/PIC 151 stack): "
+            f"{act['moment_per_volt_per_m']:.5g} N m/(V m), times the patch width "
+            f"{1e3 * act['width_m']:.4g} mm = {act['moment_per_volt']:.5g} N m/V (the paper's "
+            f"printed eq. 7: {act['paper_eq7_moment_per_volt']:.5g} N m/V). As in the paper "
+            "(moments at its nodes 2 and 3) the moment pair acts on the rotations of the two "
+            "retained actuator-edge nodes, where the super element represents it exactly "
+            "(constraint modes). Static tip deflection per volt on the full FE model: "
+            f"{1e6 * act['tip_per_volt_nodes_m']:.4g} um/V with the moments at the two nodes, "
+            f"{1e6 * act['tip_per_volt_edge_lines_m']:.4g} um/V with the same moments spread "
+            "along the patch edge lines; SE plant DC gain "
+            f"{1e6 * act['tip_per_volt_plant_m']:.4g} um/V ({act['plant_modes']} SE eigenmodes "
+            f"up to {act['plant_fn_max_hz']:.0f} Hz plus the static residual of the others). "
+            f"Actuator limit: +-{c['actuator_limit_v']:g} V (PIC 151, 0.25 mm: the "
+            "-0.4 kV/mm field limit against the poling direction, used for both signs).")
     sec.text("The SE plant is released from its first mode with a tip displacement of "
              f"{cfg['initial_tip_displacement_m']:g} m and the controllers are switched on "
-             "at t = 0. Actuator: equal and opposite moments at the two actuator-edge nodes "
-             "(pin-force model), in N m. Settling time: after it the tip displacement stays "
+             "at t = 0. Peak voltage in V and the equivalent edge moment in N m (the paper "
+             "quotes moments); closed-loop zeta of the linear controllers is the "
+             "small-signal one (command below the limit). Settling time: after it the tip "
+             "displacement stays "
              f"within {100 * c['settle_band']:g} % of its initial amplitude. The Lyapunov "
              "controller is the velocity form with a boundary layer (mvtk.control."
              "LyapunovBangBang); being nonlinear it has no closed-loop poles (zeta shown as –).")

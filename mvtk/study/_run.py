@@ -20,14 +20,14 @@ __all__ = ["StudyResult", "run", "STAGES"]
 _CODE = {
     "ingest": ("io", "study/_stages.py"),
     "fe": ("fe", "reduction", "study/_stages.py"),
-    "damping": ("signal", "damping", "study/_stages.py"),
+    "damping": ("signal", "damping", "fe", "reduction", "study/_stages.py"),
     "updating": ("fe", "updating", "study/_stages.py"),
     "reduction": ("fe", "reduction", "control", "study/_stages.py"),
     "control": ("control", "study/_stages.py"),
 }
 
 #: Stage names in execution order.
-STAGES = ("ingest", "fe", "damping", "updating", "reduction", "control", "report")
+STAGES = ("ingest", "fe", "updating", "damping", "reduction", "control", "report")
 
 
 @dataclass(frozen=True)
@@ -194,18 +194,24 @@ def run(
     do("ingest", (), bool(meas), [meas_hashes, meas_key], lambda: st.ingest(study))
     do("fe", (), True, [hashes[study.structure_file.name], cfg.get("fe", {})],
        lambda: st.fe_nominal(study))
-    do("damping", ("ingest", "fe"), "damping" in cfg, [cfg.get("damping", {})],
-       lambda: st.damping(study, arrays["ingest"], results["fe"]))
     do("updating", ("fe",), "updating" in cfg, [cfg.get("updating", {})],
        lambda: st.updating(study))
-    # the SE is built from the updated model when updating ran, else from the nominal one
-    def _reduction():
+
+    def _description() -> dict:
+        """The updated structure when updating ran, else the nominal one."""
         from ..fe import load_structure
 
-        desc = (results["updating"]["description"] if "updating" in results
+        return (results["updating"]["description"] if "updating" in results
                 else load_structure(study.structure_file))
+
+    # damping pairs identified modes with the (updated) FE model's effective masses
+    dmp_needs = ("ingest", "fe") + (("updating",) if "updating" in cfg else ())
+    do("damping", dmp_needs, "damping" in cfg, [cfg.get("damping", {})],
+       lambda: st.damping(study, arrays["ingest"], _description()))
+    # the SE is built from the updated model when updating ran, else from the nominal one
+    def _reduction():
         md = results.get("damping", {}).get("model_damping")
-        return st.reduction(study, desc, md)
+        return st.reduction(study, _description(), md)
 
     red_needs = ("fe",) + (("updating",) if "updating" in cfg else ()) + (
         ("damping",) if "damping" in cfg else ())

@@ -68,7 +68,8 @@ def test_changing_a_controller_gain_reruns_only_the_control_stage(out_dir, tmp_p
     base = STUDY.parent
     text = text.replace('"../structures/smart_beam.toml"',
                         f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv"):
+    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
+                 "SYNTHETIC_smart_beam_broadband.csv"):
         text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
     old = "gain = 0.1                # dimensionless"
     assert old in text

@@ -15,7 +15,7 @@ def test_smart_beam_study_loads_and_resolves_files():
     s = load_study(STUDY)
     assert s.synthetic and "SYNTHETIC" in s.name
     assert s.structure_file.name == "smart_beam.toml" and s.structure_file.is_file()
-    assert set(s.measurement_files) == {"impact", "decay"}
+    assert set(s.measurement_files) == {"impact", "broadband", "decay"}
     assert s.config["checks"]["se_fn_rel"] == 0.05
     assert [r["name"] for r in s.config["reduction"]["retained"]] == [
         "clamp", "actuator_x0", "actuator_x1", "sensor", "tip"]
@@ -31,7 +31,8 @@ def _variant(tmp_path, old: str, new: str) -> Path:
     base = STUDY.parent
     text = text.replace('"../structures/smart_beam.toml"',
                         f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv"):
+    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
+                 "SYNTHETIC_smart_beam_broadband.csv"):
         text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
     p = tmp_path / "study.toml"
     p.write_text(text)
@@ -58,6 +59,21 @@ def _variant(tmp_path, old: str, new: str) -> Path:
          r"reduction.retained\[4\].xyz: expected \[x, y, z\]"),
         ("band_hz = [11.0, 15.5]", "band_hz = [15.5, 11.0]",
          "measurements.decay.band_hz: expected"),
+        ("broadband_fn_hz = [78.6, 139.0, 225.6]", "broadband_fn_hz = [30.0, 139.0]",
+         r"damping.broadband_fn_hz: expected modes above those of damping.fn_hz \(max 41.14"),
+        ("broadband_fn_hz = [78.6, 139.0, 225.6]", "broadband_fn_hz = [78.6, -1.0]",
+         "damping.broadband_fn_hz: expected a list of frequencies > 0"),
+        ("[measurements.broadband]", "[measurements.broadbandx]",
+         "measurements.broadbandx: unknown test; expected 'impact', 'broadband' or 'decay'"),
+        ('response = "tip_accel"\nrecord_s = 8.0', 'response = "tip_accel"\nrecord_s = -8.0',
+         r"measurements.broadband.record_s: expected a number > 0"),
+        ("chowdhury_target_mass = 0.95", "chowdhury_target_mass = 1.5",
+         r"damping.chowdhury_target_mass: expected a fraction in \(0, 1\]"),
+        ("plant_modes = 12", "plant_modes = 0",
+         "reduction.plant_modes: expected an integer >= 1, got 0"),
+        ("actuator_limit_v = 100.0", "actuator_limit_v = -100.0",
+         r"control.actuator_limit_v: expected a number > 0"),
+        ('patch = "pzt"', "patch = 3", "control.patch: expected a patch name"),
     ],
 )
 def test_bad_study_files(tmp_path, old, new, match):
@@ -114,3 +130,55 @@ def test_code_hash_follows_the_source():
     assert a == _cache.code_hash("study/_stages.py")
     assert a != _cache.code_hash("study/_config.py")
     assert _cache.code_hash("fe") != _cache.code_hash("fe", "study/_stages.py")
+
+
+def test_broadband_modes_need_the_broadband_test(tmp_path):
+    p = _variant(tmp_path, "[measurements.broadband]", "[measurements.broadband]")
+    text = p.read_text()
+    start = text.index("[measurements.broadband]")
+    end = text.index("[measurements.decay]")
+    p.write_text(text[:start] + text[end:])
+    with pytest.raises(ConfigError, match=r"damping.broadband_fn_hz needs a "
+                                          r"\[measurements.broadband\] test"):
+        load_study(p)
+
+
+def test_patch_actuator_is_the_papers_eq7_for_the_smart_beam_stack():
+    """Moment per volt of the study's patch vs the paper's eq. 7, evaluated here by hand."""
+    from mvtk.fe import load_structure
+    from mvtk.study._stages import patch_actuator
+
+    desc = load_structure(ROOT / "data" / "structures" / "smart_beam.toml")
+    act = patch_actuator(desc)
+    # eq. 7: beam (steel 0.5 mm), adhesive (epoxy 36 um), piezo (PIC 151 0.25 mm)
+    Ep, Ea, Eb = 66.667e9, 3.546e9, 210e9
+    tp, ta, tb, d31, b = 0.25e-3, 0.036e-3, 0.5e-3, -210e-12, 0.030
+    eq7 = ((Ep * Ea * (tp * ta + ta**2) + Ep * Eb * (tb**2 + tp * tb + 2 * ta * tb))
+           / (Ep * tp + Ea * ta + Eb * tb) * d31 * b / 2)
+    assert act["moment_per_volt"] == pytest.approx(eq7, rel=1e-9)
+    assert act["paper_eq7_moment_per_volt"] == pytest.approx(eq7, rel=1e-9)
+    assert act["width_m"] == pytest.approx(b) and act["piezo_thickness_m"] == tp
+    assert act["moment_per_volt"] == pytest.approx(-1.4888e-4, rel=1e-4)
+
+
+@pytest.mark.parametrize(("change", "match"), [
+    ("name", r"control.patch: no patch 'nope' in the structure; expected one of \['pzt'\]"),
+    ("two", "control.patch: the structure has 2 patches; name the actuator patch"),
+    ("no_piezo", r"patch 'pzt': expected one piezo layer \(with d31\) in the stack, found 0"),
+])
+def test_patch_actuator_bad_input(change, match):
+    import copy
+
+    from mvtk.fe import load_structure
+    from mvtk.study._stages import patch_actuator
+
+    desc = load_structure(ROOT / "data" / "structures" / "smart_beam.toml")
+    name = None
+    if change == "name":
+        name = "nope"
+    elif change == "two":
+        desc["patches"].append(copy.deepcopy(desc["patches"][0]) | {"name": "pzt2"})
+    else:
+        del desc["materials"]["pic151"]["d31"]
+    with pytest.raises(ConfigError, match=match):
+        patch_actuator(desc, name)
