@@ -184,16 +184,16 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
     rows = []
     ch = d.get("rayleigh_chowdhury", {})
     ls = d.get("rayleigh_least_squares", {})
-    for meth, label, note in (
-            ("half_power", "half-power (two-mode fit, modes 1 and 2)", ""),
-            ("least_squares", f"least squares over all {ls.get('n_modes', '')} identified "
-                              "modes", ls.get("error", "")),
-            ("chowdhury", "Chowdhury" + (f" (anchors: modes {ch['anchors'][0] + 1} and "
-                                         f"{ch['anchors'][1] + 1})" if "anchors" in ch
-                                         else ""),
-             ch.get("error", ch.get("note", "")))):
+    anchors = (f"anchors: modes {ch['anchors'][0] + 1} and {ch['anchors'][1] + 1}"
+               if "anchors" in ch else "")
+    for meth, label, used, note in (
+            ("half_power", "half-power", "two-mode fit: modes 1 and 2", ""),
+            ("least_squares", "least squares",
+             f"all {ls.get('n_modes', '')} identified modes", ls.get("error", "")),
+            ("chowdhury", "Chowdhury", anchors, ch.get("error", ch.get("note", "")))):
         r = d.get(f"rayleigh_{meth}", {})
-        rows.append({"method": label, "alpha [1/s]": r.get("alpha", float("nan")),
+        rows.append({"method": label, "modes used": used,
+                     "alpha [1/s]": r.get("alpha", float("nan")),
                      "beta [s]": r.get("beta", float("nan")),
                      "alpha paper": _ref(res, f"{meth}_alpha", float("nan")),
                      "beta paper": _ref(res, f"{meth}_beta", float("nan")),
