@@ -16,38 +16,45 @@ E = 210 GPa: 14.25 / 42.18 Hz) the way a real specimen differs from its drawing:
   of 383 N m/rad per metre of clamped edge together with a steel modulus of 212.6 GPa
   (+1.2 %) reproduces 13.26 / 41.14 Hz to 1e-8 (least squares on
   ``boundary.clamp_stiffness`` and ``materials.steel.E`` with :func:`mvtk.fe.build_model`;
-  an ideal clamp cannot: with any E, f2/f1 stays 2.96 instead of 3.10). These two
-  numbers are what the study's model updating should find;
-- the higher modes are those of a uniform strip (bending 2 near 83 Hz, torsion 2 near
-  123 Hz), above the anti-aliasing cut-off of the files.
+  an ideal clamp cannot: with any E, f2/f1 stays 2.96 instead of 3.10); the rounded
+  values used here (383.3, 212.57 GPa) give 13.25994 / 41.13998 Hz. These two numbers
+  are what the study's model updating should find;
+- its modes are those of the mvtk FE model of the structure file with these two values
+  (:func:`truth_model`): 13.26, 41.14, 78.56 (bending 2), 139.0 (torsion 2), 172.9,
+  225.6 (bending 3), 287.2 / 287.6 Hz, ... (the file headers list them).
 
-The response is computed by modal superposition of the modes listed by
-:func:`truth_modes`: for mode i, natural frequency ``fn_hz``, damping ratio from the
-paper's Rayleigh pair, and the mass-normalised mode-shape values at the impact point and
-at the sensor (``phi_force``, ``phi_sensor`` in 1/sqrt(kg)). The shape values come from
-cantilever beam functions (bending) and a linear-in-width, quarter-sine-in-length torsion
-shape over a strip of 180 mm x 133 mm with 4.0 kg/m^2 (0.5 mm steel plus the smeared
-patch); they set amplitudes, not frequencies or damping. To use an FE truth model
-instead, replace :func:`truth_modes` by one that returns the same table from
-``mvtk.fe.modal_analysis``.
+The response is computed by modal superposition of the lowest 12 FE modes of the truth
+model (:func:`truth_modes`, up to about 510 Hz): for mode i, natural frequency
+``fn_hz``, damping ratio from the paper's Rayleigh pair (every mode), and the
+mass-normalised uz mode-shape values at the FE nodes nearest to the impact point
+(``phi_force``), the tip sensor (``phi_sensor``) and the laser point (``phi_tip``), in
+1/sqrt(kg), so the force-to-sensor participation of mode i is
+``phi_force * phi_sensor``. The modal values are rounded (frequencies to 8 significant
+digits, shapes to 1e-7) because the iterative eigensolver varies in the last digits.
 
-The two tests
--------------
+The three tests
+---------------
 1. Impact test (``SYNTHETIC_smart_beam_impact.*``): 3 hammer hits 128 s apart (the
-   first at 2 s, 388 s in all) (a
-   half-sine pulse of 1.5 ms and about 5 N at (170, 110) mm), force and tip
-   acceleration at (180, 20) mm, simulated at 2048 Hz, with sensor noise, an 8th-order
-   Butterworth anti-aliasing filter at 50 Hz applied to both channels (like a DAQ's
-   analogue filter) and decimation to 128 Hz. 128 s records give 1/128 Hz lines: about
-   one line across the mode-1 half-power band, which the damping estimators must flag.
+   first at 2 s, 388 s in all) (a half-sine pulse of 1.5 ms and about 5 N at
+   (170, 110) mm), force and tip acceleration at (180, 20) mm, simulated at 2048 Hz,
+   with sensor noise, an 8th-order Butterworth anti-aliasing filter at 50 Hz applied
+   to both channels (like a DAQ's analogue filter) and decimation to 128 Hz. 128 s
+   records give 1/128 Hz lines: about two lines across the mode-1 half-power band,
+   which the damping estimators must flag. Modes 1-2 come from this test.
 2. Free decay (``SYNTHETIC_smart_beam_decay.*``): 150 s of tip displacement (laser) and
    tip acceleration after the beam is released from a forced vibration in mode 1
    (2 mm tip amplitude; mode 2 left over at 1 % of the mode-1 modal amplitude,
    invisible to the laser on the centre line), same noise / filter / decimation.
+3. Broadband impact test (``SYNTHETIC_smart_beam_broadband.*``): 3 hits 8 s apart
+   with a hard tip (0.5 ms half-sine), same points and noise, simulated at 20 kHz,
+   8th-order anti-aliasing filter at 400 Hz, decimated to 1250 Hz (1/fs = 8e-4 s is
+   exact in the UFF header's 5-digit abscissa increment). 8 s records give 0.125 Hz
+   lines, enough for the higher modes (their half-power bands are 0.4-1.6 Hz wide);
+   the study identifies modes 3, 4 and 6 from it (for the Chowdhury pair).
 
 Formats: CSV with a ``#`` comment header (what, units, sampling rate, seed) and one
 column per channel; UFF 58b (binary, float64 ordinates, one record per channel) written
-with pyuff. Total size is about 4.5 MB.
+with pyuff. Total size is about 5.4 MB (broadband test 1.8 MB).
 
 Run ``python data/make_smart_beam_data.py`` (seed 20261122; the output is reproducible
 bit for bit for a given numpy/scipy version).

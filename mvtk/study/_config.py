@@ -22,7 +22,9 @@ Schema (see ``data/smart_beam/study.toml`` for a complete, commented example)::
                        se_fn_hz, fe4_fn_hz, zeta, half_power_alpha/beta,
                        chowdhury_alpha/beta, fe_sizes, se_sizes, source)
     [truth]            synthetic data only: parameter values of the simulated specimen,
-                       by dotted path (checked against the updated values)
+                       by dotted path (checked against the updated values), and
+                       optionally rayleigh_alpha, rayleigh_beta (the damping of every
+                       simulated mode; identified higher modes are checked against it)
 
 Every section but ``[study]`` and ``[structure]`` is optional: a missing section skips
 its stage (reported as "not configured").
