@@ -212,8 +212,10 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                  f"{ch['target_mass']:g} (paper), used {ch['target_used']:.3f}; the "
                  f"identified modes hold {ch['mass_reached']:.3f} of the effective mass (uz) "
                  "of the FE model used for the SE (updated when updating ran), each paired "
-                 "with the FE mode nearest in frequency. " + (ch["note"] + ". " if ch["note"]
-                                                              else "")
+                 "with the FE mode nearest in frequency. "
+                 + ("That is below the paper's target (and below EN 1998's 0.90), so the "
+                    "upper anchor is the mode at which the highest fraction reached is "
+                    "attained. " if ch["note"] else "")
                  + "The paper's Chowdhury pair rests on damping ratios the paper does not "
                  "give, so it is not expected to be reproduced.")
         sec.table(pd.DataFrame({
