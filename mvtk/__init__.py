@@ -5,7 +5,8 @@ vibration controller:
 
 ``mvtk.io``  -> ``mvtk.signal`` -> ``mvtk.damping``;
 ``mvtk.fe``  -> ``mvtk.updating`` -> ``mvtk.reduction`` -> ``mvtk.control``;
-``mvtk.validation``, ``mvtk.report`` and ``mvtk.study`` wire it together.
+``mvtk.validation``, ``mvtk.report`` and ``mvtk.study`` wire it together;
+``mvtk.scale`` runs the same calls on dask (campaigns, parameter studies).
 
 Subpackages are imported lazily (``mvtk.fe`` is loaded on first access), and
 ``import mvtk`` never imports matplotlib, pyuff or dask.
@@ -35,6 +36,7 @@ _SUBPACKAGES = (
     "plot",
     "report",
     "study",
+    "scale",
     "testing",
 )
 
