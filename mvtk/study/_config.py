@@ -17,6 +17,12 @@ Schema (see ``data/smart_beam/study.toml`` for a complete, commented example)::
     [control]          actuator_nodes, sensor_node, patch, actuator_limit_v,
                        initial_tip_displacement_m, t_end_s, fs_out, settle_band,
                        [[control.controllers]] name, type, ... (gains and u_max in V)
+    [uncertainty]      optional Monte-Carlo propagation on the updated structure:
+                       n_samples (>= 2), seed (int), n_modes (default 4),
+                       distribution ("normal" | "lognormal"), and
+                       [uncertainty.scatter] "dotted.path" = relative std (CoV of the
+                       input, e.g. "materials.steel.E" = 0.03); the mean of each input
+                       is its value in the updated (else nominal) structure
     [checks]           tolerances (ratios or seconds), see :data:`CHECK_KEYS`
     [references]       published values shown next to mvtk's (experiment_fn_hz, fe_fn_hz,
                        se_fn_hz, fe4_fn_hz, zeta, half_power_alpha/beta,
@@ -44,7 +50,7 @@ from ..errors import ConfigError
 __all__ = ["Study", "load_study", "CHECK_KEYS", "CONTROLLER_TYPES"]
 
 SECTIONS = ("study", "structure", "measurements", "damping", "fe", "updating", "reduction",
-            "control", "checks", "references", "truth")
+            "control", "uncertainty", "checks", "references", "truth")
 CHECK_KEYS = {
     "identified_fn_rel": 0.005,
     "identified_zeta_rel": 0.10,
@@ -54,7 +60,9 @@ CHECK_KEYS = {
     "ppf_settling_s": 1.5,
     "closed_loop_zeta_min": 0.005,
     "truth_param_rel": 0.05,
+    "uncertainty_cov_rel": 0.20,
 }
+UNCERTAINTY_DISTRIBUTIONS = ("normal", "lognormal")
 CONTROLLER_TYPES = ("PPF", "SRF", "LyapunovBangBang", "VelocityFeedback")
 
 
@@ -259,6 +267,9 @@ def load_study(path: str | Path) -> Study:
                 raise ConfigError(f"{where}.type: expected one of {CONTROLLER_TYPES}, "
                                   f"got {kind!r}")
 
+    if "uncertainty" in cfg:
+        _check_uncertainty(cfg["uncertainty"])
+
     checks = dict(CHECK_KEYS)
     for key in cfg.get("checks", {}):
         if key not in CHECK_KEYS:
@@ -268,3 +279,36 @@ def load_study(path: str | Path) -> Study:
     cfg["checks"] = checks
     return Study(path=p.resolve(), config=cfg, structure_file=structure_file,
                  measurement_files=files)
+
+
+def _int(d: Mapping, key: str, where: str, default: int, minimum: int) -> int:
+    v = d.get(key, default)
+    if isinstance(v, bool) or not isinstance(v, int) or v < minimum:
+        raise ConfigError(f"{where}.{key}: expected an integer >= {minimum}, got {v!r}")
+    return v
+
+
+def _check_uncertainty(u: Any) -> None:
+    """Validate ``[uncertainty]`` (schema in the module docstring)."""
+    if not isinstance(u, dict):
+        raise ConfigError(f"uncertainty: expected a table, got {u!r}")
+    known = {"n_samples", "seed", "n_modes", "distribution", "scatter"}
+    unknown = sorted(set(u) - known)
+    if unknown:
+        raise ConfigError(f"uncertainty: unknown keys {unknown}; expected some of "
+                          f"{sorted(known)}")
+    _int(u, "n_samples", "uncertainty", 40, 2)
+    _int(u, "seed", "uncertainty", 0, 0)
+    _int(u, "n_modes", "uncertainty", 4, 1)
+    kind = u.get("distribution", "normal")
+    if kind not in UNCERTAINTY_DISTRIBUTIONS:
+        raise ConfigError(f"uncertainty.distribution: expected one of "
+                          f"{UNCERTAINTY_DISTRIBUTIONS}, got {kind!r}")
+    sc = _need(u, "scatter", "uncertainty")
+    if not isinstance(sc, dict) or not sc:
+        raise ConfigError(f"uncertainty.scatter: expected a table of dotted structure paths "
+                          f"to relative standard deviations, got {sc!r}")
+    for path, rel in sc.items():
+        if isinstance(rel, bool) or not isinstance(rel, int | float) or not 0 < rel < 0.5:
+            raise ConfigError(f"uncertainty.scatter.{path!r}: expected a relative standard "
+                              f"deviation in (0, 0.5), got {rel!r}")

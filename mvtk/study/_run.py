@@ -22,12 +22,14 @@ _CODE = {
     "fe": ("fe", "reduction", "study/_stages.py"),
     "damping": ("signal", "damping", "fe", "reduction", "study/_stages.py"),
     "updating": ("fe", "updating", "study/_stages.py"),
+    "uncertainty": ("fe", "updating", "scale", "study/_stages.py"),
     "reduction": ("fe", "reduction", "control", "study/_stages.py"),
     "control": ("control", "study/_stages.py"),
 }
 
 #: Stage names in execution order.
-STAGES = ("ingest", "fe", "updating", "damping", "reduction", "control", "report")
+STAGES = ("ingest", "fe", "updating", "uncertainty", "damping", "reduction", "control",
+          "report")
 
 
 @dataclass(frozen=True)
@@ -203,6 +205,12 @@ def run(
 
         return (results["updating"]["description"] if "updating" in results
                 else load_structure(study.structure_file))
+
+    # Monte Carlo on the updated structure; no later stage depends on it (its key is in
+    # no other stage's key, so changing [uncertainty] reruns only this stage)
+    unc_needs = ("fe",) + (("updating",) if "updating" in cfg else ())
+    do("uncertainty", unc_needs, "uncertainty" in cfg, [cfg.get("uncertainty", {})],
+       lambda: st.uncertainty(study, _description()))
 
     # damping pairs identified modes with the (updated) FE model's effective masses
     dmp_needs = ("ingest", "fe") + (("updating",) if "updating" in cfg else ())

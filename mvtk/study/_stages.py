@@ -16,7 +16,8 @@ import numpy as np
 from ..errors import ConfigError
 from ._config import Study
 
-__all__ = ["ingest", "fe_nominal", "damping", "updating", "reduction", "control"]
+__all__ = ["ingest", "fe_nominal", "damping", "updating", "uncertainty", "reduction",
+           "control"]
 
 
 def _warning_messages(caught) -> list[str]:
@@ -305,6 +306,91 @@ def updating(study: Study):
         "warnings": _warning_messages(caught),
     }
     return result, None
+
+
+# ------------------------------------------------------------------------ uncertainty
+def _first_order_cov(description: dict, scatter: dict, n_modes: int, rel_step: float = 0.01):
+    """Log-sensitivities d ln f / d ln p (central differences) and the first-order CoV.
+
+    For independent inputs with coefficients of variation ``c_i``, to first order
+    ``CoV(f_j) = sqrt(sum_i (S_ij c_i)^2)`` with ``S_ij = d ln f_j / d ln p_i``.
+    """
+    from ..fe import build_model, get_by_path, modal_analysis
+    from ..updating import with_values
+
+    sens = []
+    for path in scatter:
+        p0 = float(get_by_path(description, path))
+        f = [modal_analysis(build_model(with_values(description, {path: p0 * (1 + s)})),
+                            n_modes).fn_hz for s in (rel_step, -rel_step)]
+        sens.append((np.log(f[0]) - np.log(f[1]))
+                    / (np.log1p(rel_step) - np.log1p(-rel_step)))
+    sens = np.asarray(sens)  # (n_params, n_modes)
+    c = np.array([float(v) for v in scatter.values()])
+    return sens, np.sqrt(((sens * c[:, None]) ** 2).sum(axis=0))
+
+
+def uncertainty(study: Study, description: dict):
+    """Monte-Carlo propagation of the ``[uncertainty]`` input scatter to eigenfrequencies.
+
+    Runs :func:`mvtk.scale.monte_carlo` in process (no dask needed) on ``description``
+    (the updated structure when updating ran); each input is drawn with its value in
+    ``description`` as the mean and ``scatter[path] * |mean|`` as the standard deviation.
+    Also gives the first-order (linearised) CoV of each frequency for comparison.
+    """
+    import xarray as xr
+
+    from ..fe import get_by_path
+    from ..scale import monte_carlo
+
+    cfg = study.section("uncertainty")
+    scatter = {str(k): float(v) for k, v in cfg["scatter"].items()}
+    n = int(cfg.get("n_samples", 40))
+    seed = int(cfg.get("seed", 0))
+    n_modes = int(cfg.get("n_modes", 4))
+    kind = str(cfg.get("distribution", "normal"))
+    nominal = {}
+    for path in scatter:
+        try:
+            nominal[path] = float(get_by_path(description, path))
+        except ConfigError as err:
+            raise ConfigError(f"uncertainty.scatter.{path!r}: {err}") from None
+        except (TypeError, ValueError):
+            raise ConfigError(f"uncertainty.scatter.{path!r}: the structure value at this "
+                              "path is not a number") from None
+    dists = {p: (kind, (nominal[p], rel * abs(nominal[p]))) for p, rel in scatter.items()}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        mc = monte_carlo(description, dists, n, np.random.default_rng(seed), n_modes=n_modes,
+                         on_error="nan")
+    sens, cov_fo = _first_order_cov(description, scatter, n_modes)
+    stats = mc.to_dataframe()
+    stats["cov_first_order"] = cov_fo
+    # the linearised model on the SAME samples: ln f - ln f0 = sum_i S_ij ln(p_i / p0_i);
+    # free of the sampling error, so it isolates the nonlinearity of f(p)
+    values = np.column_stack([mc.samples[p].values for p in scatter])
+    ok = np.isfinite(mc.fn_hz).all(axis=1) & (values > 0).all(axis=1)
+    logs = np.log(values[ok] / np.array([nominal[p] for p in scatter]))
+    stats["cov_first_order_same_samples"] = (np.std(logs @ sens, axis=0, ddof=1)
+                                             if ok.sum() > 1 else np.nan)
+    result = {
+        "n_samples": n, "seed": seed, "distribution": kind, "n_modes": n_modes,
+        "parameters": [{"path": p, "mean": nominal[p], "rel_std": scatter[p],
+                        "std": scatter[p] * abs(nominal[p]),
+                        **{f"dlnf{j + 1}/dlnp": float(sens[i, j]) for j in range(n_modes)}}
+                       for i, p in enumerate(scatter)],
+        "statistics": stats.to_dict(orient="records"),
+        "n_failed": int(mc.samples.attrs.get("n_failed", 0)),
+        "scheduler": str(mc.samples.attrs.get("scheduler", "")),
+        "warnings": _warning_messages(caught),
+    }
+    ds = xr.Dataset(
+        {"fn_hz": (("sample", "mode"), mc.fn_hz, {"units": "Hz"}),
+         "parameter_value": (("sample", "parameter"), values)},
+        coords={"sample": np.arange(n), "mode": np.arange(1, n_modes + 1),
+                "parameter": list(scatter)},
+    )
+    return result, ds
 
 
 # -------------------------------------------------------------------------- reduction

@@ -1,6 +1,7 @@
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from mvtk.errors import ConfigError
@@ -74,6 +75,18 @@ def _variant(tmp_path, old: str, new: str) -> Path:
         ("actuator_limit_v = 100.0", "actuator_limit_v = -100.0",
          r"control.actuator_limit_v: expected a number > 0"),
         ('patch = "pzt"', "patch = 3", "control.patch: expected a patch name"),
+        ("n_samples = 40 ", "n_samples = 1 ",
+         "uncertainty.n_samples: expected an integer >= 2, got 1"),
+        ("seed = 1\n", "seed = 1.5\n", "uncertainty.seed: expected an integer >= 0, got 1.5"),
+        ('distribution = "normal"', 'distribution = "weibull"',
+         r"uncertainty.distribution: expected one of \('normal', 'lognormal'\), got 'weibull'"),
+        ('"materials.steel.E" = 0.03', '"materials.steel.E" = 3.0',
+         r"uncertainty.scatter.'materials.steel.E': expected a relative standard deviation "
+         r"in \(0, 0.5\), got 3.0"),
+        ("[uncertainty.scatter]", "[uncertainty.scater]",
+         r"uncertainty: unknown keys \['scater'\]"),
+        ("[uncertainty.scatter]", "scatter = {}\n[references.extra]",
+         "uncertainty.scatter: expected a table of dotted structure paths"),
     ],
 )
 def test_bad_study_files(tmp_path, old, new, match):
@@ -182,3 +195,39 @@ def test_patch_actuator_bad_input(change, match):
         del desc["materials"]["pic151"]["d31"]
     with pytest.raises(ConfigError, match=match):
         patch_actuator(desc, name)
+
+
+def _plain_plate() -> dict:
+    """The smart-beam steel plate without the patch, rigidly clamped, coarse mesh."""
+    from mvtk.fe import load_structure
+
+    desc = load_structure(ROOT / "data" / "structures" / "smart_beam.toml")
+    desc.pop("patches", None)
+    desc["mesh"]["element_size"] = 0.02
+    return desc
+
+
+def test_uncertainty_sensitivities_of_a_homogeneous_plate_are_the_scaling_laws():
+    """f of a thin homogeneous plate scales as t sqrt(E / rho): S = 1/2, -1/2, about 1."""
+    from mvtk.study._stages import _first_order_cov
+
+    scatter = {"materials.steel.E": 0.03, "materials.steel.rho": 0.01,
+               "structure.layers.0.thickness": 0.02}
+    sens, cov = _first_order_cov(_plain_plate(), scatter, 3)
+    assert sens[0] == pytest.approx(0.5, abs=1e-6)     # K linear in E
+    assert sens[1] == pytest.approx(-0.5, abs=1e-6)    # M linear in rho
+    assert sens[2] == pytest.approx(1.0, abs=5e-3)     # Kirchhoff limit (t/L = 0.003)
+    assert cov == pytest.approx(np.hypot(np.hypot(0.015, 0.005), 0.02), rel=5e-3)
+
+
+@pytest.mark.parametrize(("path", "match"), [
+    ("materials.steel.Young", "no entry 'materials.steel.Young' in the structure"),
+    ("materials.steel", r"uncertainty.scatter.'materials.steel': the structure value at "
+                        "this path is not a number"),
+])
+def test_uncertainty_stage_rejects_bad_paths(tmp_path, path, match):
+    from mvtk.study._stages import uncertainty
+
+    p = _variant(tmp_path, '"materials.steel.E" = 0.03', f'"{path}" = 0.03')
+    with pytest.raises(ConfigError, match=match):
+        uncertainty(load_study(p), _plain_plate())
