@@ -1,6 +1,7 @@
 """Run a whole validation study from one TOML file (see ``data/smart_beam/study.toml``).
 
 ``mvtk.study.run(study_path, out_dir)`` chains ingest -> FE -> damping -> updating ->
+(optional Monte-Carlo uncertainty of the updated model, ``[uncertainty]``) ->
 Craig-Bampton SE -> controllers -> HTML report, caching each stage in ``out_dir/cache``
 under a hash of its inputs.
 """
