@@ -31,6 +31,7 @@ import scipy.linalg
 from ..errors import DimensionError, ParameterError
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
+from ._threads import small_dense
 
 __all__ = [
     "PPF",
@@ -479,7 +480,8 @@ class LQR:
             if Q.shape != (n, n):
                 raise DimensionError(f"LQR Q must have shape ({n}, {n}), got {Q.shape}")
         b = ss.B[:, [act]]
-        P = scipy.linalg.solve_continuous_are(ss.A, b, Q, np.array([[self.R]]))
+        with small_dense(2 * n + 1):  # the QZ of the (2n+1) pencil: one BLAS thread
+            P = scipy.linalg.solve_continuous_are(ss.A, b, Q, np.array([[self.R]]))
         return (b.T @ P) / self.R
 
     def realize(self, plant, design_plant=None) -> FeedbackLaw:

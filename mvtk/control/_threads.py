@@ -1,0 +1,28 @@
+"""BLAS thread control around the small dense problems of the controllers.
+
+Riccati solves (QZ), matrix exponentials and the blocked time march work on matrices of a
+few hundred rows. On such sizes a second BLAS thread buys nothing and, on a loaded
+machine, costs several times the single-thread time (threads waiting for a core).
+:func:`small_dense` limits BLAS to one thread with :mod:`threadpoolctl` when it is
+installed (``pip install "mvtk[control]"``) and is a no-op otherwise.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+__all__ = ["small_dense"]
+
+#: Largest matrix order treated as "small" (one BLAS thread).
+SMALL_ORDER = 1000
+
+
+def small_dense(order: int):
+    """Context manager: one BLAS thread for a dense problem of ``order`` rows."""
+    if order > SMALL_ORDER:
+        return contextlib.nullcontext()
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:
+        return contextlib.nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
