@@ -476,7 +476,7 @@ def trajectory_stability(plant, simulation, controller=None, design_plant=None, 
     try:
         X = np.asarray(simulation["states"].values, dtype=float)
         t = np.asarray(simulation["time"].values, dtype=float)
-    except (KeyError, TypeError, AttributeError) as err:
+    except (KeyError, TypeError, AttributeError, IndexError, ValueError) as err:
         raise ParameterError(
             "trajectory_stability needs the Dataset of mvtk.control.simulate (variable "
             f"'states', coord 'time'), got {type(simulation).__name__}"
