@@ -15,7 +15,6 @@ boundary layer; the clip at the actuator limit is applied exactly.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -26,7 +25,7 @@ from ..errors import ConvergenceError, DimensionError, ParameterError
 from ._controllers import FeedbackLaw, _index, plant_state_space
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
-from ._threads import small_dense
+from ._threads import one_blas_thread
 
 __all__ = ["closed_loop", "simulate", "release_state", "Disturbance", "realize"]
 
@@ -337,20 +336,7 @@ def _integrate(law: FeedbackLaw, Bx: np.ndarray, Su: np.ndarray, E, X0, t, metho
     return sol.y.T
 
 
-def _one_blas_thread(fn):
-    """Run ``fn(plant, ...)`` with one BLAS thread when the plant is small (see
-    :mod:`mvtk.control._threads`)."""
-    @functools.wraps(fn)
-    def wrapper(plant, *args, **kwargs):
-        n = getattr(plant, "n_coords", None)
-        order = 2 * n if n is not None else getattr(plant, "n_states", 0)
-        with small_dense(order + 64):  # plant + controller states
-            return fn(plant, *args, **kwargs)
-
-    return wrapper
-
-
-@_one_blas_thread
+@one_blas_thread
 def simulate(
     plant,
     controller=None,
