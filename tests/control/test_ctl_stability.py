@@ -81,6 +81,11 @@ def test_comparison_table_fails_the_unstable_gain(plant3):
     assert df.loc["PPF 0.5", "gain_margin_db"] == pytest.approx(20 * np.log10(2), rel=1e-9)
     rows = res.to_dict()["rows"]
     assert rows[2]["stable"] is False and rows[2]["added_damping1"] is None
+    import json
+
+    back = json.loads(json.dumps(res.to_dict()))  # the CLI's --json path
+    assert back["rows"][2]["verdict"] == "unstable"
+    assert back["rows"][2]["stability_reason"].startswith("unstable: real pole at +79.4")
 
 
 # ------------------------------------------------------------------- verdicts
@@ -135,6 +140,10 @@ LAWS = {
     "velocity collocated": lambda: VelocityFeedback(1e-3, sensor="patch_rotation"),
     "velocity non-collocated": lambda: VelocityFeedback(1e-3, sensor="tip"),
     "LQR": lambda: LQR(R=1e-3),
+    # filter with the damping of the mode it is tuned on: a nearly defective loop matrix
+    # (eigenvector condition ~1e10), evaluated on its complex Schur form
+    "PPF defective": lambda: PPF([(F1, cantilever_modal_plant(3).meta["zeta"][0], 0.5)],
+                                 sensor="tip"),
 }
 
 
