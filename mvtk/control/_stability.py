@@ -176,7 +176,8 @@ def stability_verdict(eigenvalues, *, zeta_tol: float = ZETA_TOL,
     reason = ""
     if offending.size:
         p = offending[0]
-        what = "real pole" if abs(p.imag) <= tol[bad][0] else "pole pair"
+        p_tol = max(zeta_tol * abs(p), ATOL_REL * float(np.max(np.abs(lam))))
+        what = "real pole" if abs(p.imag) <= p_tol else "pole pair"
         reason = (f"{verdict}: {what} at {p.real:+.4g}{p.imag:+.4g}j 1/s "
                   f"({abs(p) / (2 * np.pi):.4g} Hz, zeta {-p.real / abs(p) if abs(p) else 0:.3g})"
                   + (f" and {offending.size - 1} more" if offending.size > 1 else ""))
