@@ -372,3 +372,24 @@ def test_spillover_on_a_retained_mode_is_not_residual():
     res = spillover_check(VelocityFeedback(1e-3, sensor="tip"), p, p)
     assert res.verdict == "unstable"
     assert not res.offending[0]["residual"]
+
+
+def test_forced_comparison_judges_saturated_law_by_boundedness(plant3):
+    """A harmonic disturbance at mode 1 keeps energy in the plant: the saturated PPF is
+    judged on divergence only (and on its unsaturated eigenvalues)."""
+    from mvtk.control import Disturbance
+
+    sc = Scenario(output="tip", t_end=1.0, fs_out=500.0, release_mode=None,
+                  disturbance=Disturbance("harmonic", "patch", 5.0, f_hz=F1))
+    res = compare_controllers(plant3, {"PPF sat": PPF([(F1, 0.3, 0.5)], sensor="tip",
+                                                      u_max=1.0)}, sc)
+    row = res.to_dataframe().loc["PPF sat"]
+    assert row["verdict"] == "stable" and row["stability_source"] == "linearisation+trajectory"
+
+
+def test_trajectory_of_a_state_space_plant_uses_the_state_norm(plant3):
+    ss = plant3.to_state_space()
+    ds = _fake(plant3, lambda t: np.exp(-t))
+    assert trajectory_stability(ss, ds).verdict == "stable"
+    ds = _fake(plant3, lambda t: np.exp(t))
+    assert trajectory_stability(ss, ds).verdict == "unstable"
