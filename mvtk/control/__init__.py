@@ -17,7 +17,11 @@ closed loop as a :class:`StateSpace`; :func:`simulate` returns an xarray Dataset
 :func:`added_damping`, :func:`closed_loop_modes`, :func:`peak_reduction_db`,
 :func:`voltage_stats`, :func:`critical_gain`, :func:`ppf_gain_limit`,
 :func:`srf_gain_limit`, :func:`spillover_check`; :func:`compare_controllers` tabulates
-them in the shape of the paper's section 4.3.
+them in the shape of the paper's section 4.3. Stability comes first: every loop gets a
+verdict (:func:`closed_loop_stability`, :func:`trajectory_stability` for the nonlinear
+laws, :func:`stability_summary`), with gain and phase margins and the critical gain
+(:func:`loop_margins`); an unstable or marginal loop is never reported as added damping
+(docs/control_stability.md).
 
 Example
 -------
@@ -56,6 +60,16 @@ from ._modal import cantilever_modal_plant, modal_plant
 from ._plant import StructuralPlant, dof_load, dof_output, structural_plant
 from ._second_order import SecondOrderSystem
 from ._simulate import Disturbance, closed_loop, release_state, simulate
+from ._stability import (
+    VERDICTS,
+    LoopMargins,
+    StabilityVerdict,
+    closed_loop_stability,
+    loop_margins,
+    stability_summary,
+    stability_verdict,
+    trajectory_stability,
+)
 from ._statespace import StateSpace
 
 __all__ = [
@@ -89,6 +103,14 @@ __all__ = [
     "critical_gain",
     "SpilloverResult",
     "spillover_check",
+    "VERDICTS",
+    "StabilityVerdict",
+    "stability_verdict",
+    "closed_loop_stability",
+    "trajectory_stability",
+    "LoopMargins",
+    "loop_margins",
+    "stability_summary",
     "Scenario",
     "ComparisonResult",
     "compare_controllers",

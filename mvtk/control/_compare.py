@@ -14,6 +14,7 @@ from ._controllers import LQR, PPF, SRF, LyapunovBangBang, VelocityFeedback
 from ._metrics import added_damping, peak_reduction_db, settling_time, voltage_stats
 from ._second_order import SecondOrderSystem
 from ._simulate import Disturbance, release_state, simulate
+from ._stability import stability_summary
 
 __all__ = ["Scenario", "ComparisonResult", "compare_controllers", "run_control_section",
            "controller_from_dict", "switching_peak"]
@@ -64,9 +65,15 @@ class ComparisonResult:
     """Metrics per controller (rows) plus the simulated histories.
 
     Columns: ``settling_time_s`` (inf: not settled within the record), ``fn1_hz`` and
-    ``zeta1`` (closed-loop mode 1 from the eigenvalues; NaN for nonlinear laws),
-    ``added_damping1``, ``peak_reduction_db`` (FFT peak at mode 1 vs the open loop),
-    ``peak_voltage``, ``rms_voltage`` (actuator units).
+    ``zeta1`` (closed-loop mode 1 from the eigenvalues; NaN for nonlinear laws; for an
+    unstable or marginal loop those of the worst pole, see
+    :func:`~mvtk.control.added_damping`), ``added_damping1`` (NaN unless stable),
+    ``peak_reduction_db`` (FFT peak at mode 1 vs the open loop), ``peak_voltage``,
+    ``rms_voltage`` (actuator units), then the stability columns of
+    :func:`~mvtk.control.stability_summary`: ``stable``, ``verdict``, ``max_real_pole``,
+    ``min_closed_loop_zeta``, ``gain_margin_db``, ``phase_margin_deg``,
+    ``critical_gain_factor``, ``critical_gain``, ``stability_source``,
+    ``stability_reason``. The open-loop row carries the plant's own verdict (no margins).
     """
 
     rows: tuple[dict, ...]
@@ -83,6 +90,8 @@ class ComparisonResult:
         def clean(v):
             if isinstance(v, float) and not math.isfinite(v):
                 return None
+            if isinstance(v, np.bool_):
+                return bool(v)
             return v
 
         return {"rows": [{k: clean(v) for k, v in r.items()} for r in self.rows]}
@@ -131,6 +140,9 @@ def compare_controllers(
     from ._metrics import closed_loop_modes
 
     open_modes = closed_loop_modes(plant)
+    nan = float("nan")
+    forced = scenario.noise_std is not None or (
+        scenario.disturbance is not None and scenario.disturbance.kind != "impulse")
     osc = open_modes.eigenvalues.imag > 0
     f1, z1 = float(open_modes.fn_hz[osc][0]), float(open_modes.zeta[osc][0])
     rows = []
@@ -151,6 +163,14 @@ def compare_controllers(
         row["peak_reduction_db"] = float(peak_reduction_db(y_open, y, scenario.fs_out, [f1])[0])
         v = voltage_stats(ds.inputs.values[0])
         row.update(peak_voltage=v["peak"], rms_voltage=v["rms"])
+        if ctrl is None:
+            ov = open_modes.verdict
+            row.update(stable=ov.stable, verdict=ov.verdict, max_real_pole=ov.max_real_pole,
+                       min_closed_loop_zeta=ov.min_zeta, gain_margin_db=nan,
+                       phase_margin_deg=nan, critical_gain_factor=nan, critical_gain=nan,
+                       stability_source="eigenvalues", stability_reason=ov.reason)
+        else:
+            row.update(stability_summary(plant, ctrl, ds, forced=forced))
         rows.append(row)
     return ComparisonResult(rows=tuple(rows), simulations=sims, scenario=scenario)
 

@@ -31,6 +31,7 @@ import scipy.linalg
 from ..errors import DimensionError, ParameterError
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
+from ._threads import small_dense
 
 __all__ = [
     "PPF",
@@ -108,10 +109,38 @@ class FeedbackLaw:
     layer: str = "sat"
     description: str = ""
     meta: dict = field(default_factory=dict)
+    A_loop: np.ndarray | None = None
+    B_loop: np.ndarray | None = None
 
     @property
     def is_linear(self) -> bool:
         return self.kind == "linear"
+
+    def slope(self) -> float:
+        """``du/ds`` at ``s = 0``: 1 for linear and saturated laws, ``-u_max/eps`` for the
+        switching law (its in-layer gain)."""
+        return float(self.du_ds(np.zeros(1))[0])
+
+    def linearized_matrix(self) -> np.ndarray:
+        """``A + Bu (du/ds)(0) S``: the closed loop linearised at the origin.
+
+        Equals :meth:`closed_loop_matrix` for a linear law; for a saturated law it is the
+        unsaturated loop, for the switching law the in-layer (boundary-layer) loop. Its
+        eigenvalues decide the local stability of the origin.
+        """
+        return self.A + self.slope() * (self.Bu @ self.S)
+
+    def loop(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Loop transfer broken at the actuator input, ``L(s) = c (sI - A)^-1 b``.
+
+        Returns ``(A, b, c)`` in the negative-feedback convention: the closed loop is
+        ``A - b c`` (same eigenvalues as :meth:`linearized_matrix`), the characteristic
+        equation ``1 + L(s) = 0``. The plant's own feedthrough into the measurement (a
+        static correction) belongs to ``L``; the law is linearised at the origin.
+        """
+        A = self.A if self.A_loop is None else self.A_loop
+        b = self.Bu if self.B_loop is None else self.B_loop
+        return A, b, -self.slope() * self.S
 
     def u_of(self, s: np.ndarray) -> np.ndarray:
         """Actuator command for the switching argument(s) ``s`` (any shape)."""
@@ -221,6 +250,12 @@ def _linear_law(
     A[n:, n:] = ctrl.Ac
     Bu = np.vstack([ss.B[:, [act]], np.zeros((nc, 1))])
     S = np.hstack([ctrl.Dc @ Cz, ctrl.Cc])
+    # loop broken at the actuator input v (plant input and measurement feedthrough):
+    # X' = A0 X + [b; Bc Dz] v + [0; Bc Dzdot] v', u = S X; with X~ = X - [0; Bc Dzdot] v
+    # (S [0; Bc Dzdot] = Cc Bc Dzdot = 0) the loop is (A0, [b; Bc Dz] + A0 [0; Bc Dzdot], S)
+    A_loop = A.copy()
+    E = np.vstack([np.zeros((n, 1)), ctrl.Bc @ Dzdot])
+    B_loop = np.vstack([ss.B[:, [act]], ctrl.Bc @ Dz]) + A_loop @ E
     if direct:  # z = Cz x + Dz u + Dzdot u', u = Cc xc, u' = Cc Ac xc (Dc = 0, Cc Bc = 0)
         A[n:, :] += ctrl.Bc @ Dz @ S
         A[n:, n:] += ctrl.Bc @ Dzdot @ ctrl.Cc @ ctrl.Ac
@@ -229,6 +264,7 @@ def _linear_law(
         A=A, Bu=Bu, Nz=Nz, S=S, Sz=ctrl.Dc.copy(),
         kind="linear" if u_max is None else "saturated", n_plant=n, actuator=act,
         controller_states=tuple(ctrl.states), u_max=u_max, description=description, meta=meta,
+        A_loop=A_loop, B_loop=B_loop,
     )
 
 
@@ -444,7 +480,8 @@ class LQR:
             if Q.shape != (n, n):
                 raise DimensionError(f"LQR Q must have shape ({n}, {n}), got {Q.shape}")
         b = ss.B[:, [act]]
-        P = scipy.linalg.solve_continuous_are(ss.A, b, Q, np.array([[self.R]]))
+        with small_dense(2 * n + 1):  # the QZ of the (2n+1) pencil: one BLAS thread
+            P = scipy.linalg.solve_continuous_are(ss.A, b, Q, np.array([[self.R]]))
         return (b.T @ P) / self.R
 
     def realize(self, plant, design_plant=None) -> FeedbackLaw:

@@ -16,6 +16,7 @@ import numpy as np
 from ..errors import DimensionError, ParameterError
 from ._controllers import plant_state_space
 from ._simulate import closed_loop, realize
+from ._stability import ZETA_TOL, StabilityVerdict, stability_verdict
 
 __all__ = [
     "settling_time",
@@ -92,7 +93,13 @@ class ModalProperties:
 
     @property
     def stable(self) -> bool:
-        return bool(np.all(self.eigenvalues.real < 0))
+        """True when the verdict is ``"stable"`` (marginal poles are not stable)."""
+        return self.verdict.stable
+
+    @property
+    def verdict(self) -> StabilityVerdict:
+        """:func:`~mvtk.control.stability_verdict` of the eigenvalues."""
+        return stability_verdict(self.eigenvalues)
 
     def to_dataframe(self):
         import pandas as pd
@@ -134,7 +141,30 @@ def _match(open_poles: np.ndarray, closed_poles: np.ndarray) -> np.ndarray:
     return out
 
 
-def added_damping(plant, controller, mode: int = 1, design_plant=None) -> dict:
+def _origins(law) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Closed-loop poles, and for each the uncoupled open-loop pole it continues and
+    where that pole comes from (``"plant mode k"`` or ``"controller"``).
+
+    The pairing is the assignment of least total distance in the complex plane between
+    the poles of the uncoupled plant and controller and the closed-loop poles.
+    """
+    n = law.n_plant
+    lam_p = np.linalg.eigvals(law.A[:n, :n])
+    lam_c = np.linalg.eigvals(law.A[n:, n:]) if law.A.shape[0] > n else np.zeros(0, complex)
+    plant_modes = modal_properties(lam_p)
+    labels_p = []
+    for lam in lam_p:
+        k = int(np.argmin(np.abs(plant_modes.eigenvalues - (lam.real + 1j * abs(lam.imag)))))
+        labels_p.append(f"plant mode {k + 1}")
+    lam_open = np.concatenate([lam_p, lam_c])
+    labels = labels_p + ["controller"] * lam_c.size
+    lam_closed = np.linalg.eigvals(law.linearized_matrix())
+    idx = _match(lam_closed, lam_open)  # open pole for each closed pole
+    return lam_closed, lam_open[idx], [labels[i] for i in idx]
+
+
+def added_damping(plant, controller, mode: int = 1, design_plant=None,
+                  *, zeta_tol: float = ZETA_TOL) -> dict:
     """Damping of plant mode ``mode`` (1-based) without and with the controller.
 
     The closed-loop poles are paired with the open-loop poles of the uncoupled plant and
@@ -142,10 +172,19 @@ def added_damping(plant, controller, mode: int = 1, design_plant=None) -> dict:
     pole that continues the structural mode is followed even when a PPF filter tuned on
     it splits the pair.
 
+    An unstable or marginal loop adds no damping: the verdict of the closed-loop
+    eigenvalues (:func:`~mvtk.control.stability_verdict`) comes first, and when it is not
+    ``"stable"`` ``added`` is NaN and ``zeta_closed`` / ``fn_hz_closed`` are those of the
+    worst closed-loop pole (``zeta_closed <= 0`` up to the marginal tolerance, e.g. -1
+    for a real unstable pole), so that a check ``zeta_closed >= zeta_min`` fails.
+
     Returns
     -------
     dict
-        ``fn_hz_open``, ``zeta_open``, ``fn_hz_closed``, ``zeta_closed``, ``added``.
+        ``fn_hz_open``, ``zeta_open``, ``fn_hz_closed``, ``zeta_closed``, ``added``, and
+        the verdict: ``stable`` (bool), ``verdict`` (``"stable"``, ``"marginal"`` or
+        ``"unstable"``), ``max_real_pole`` (1/s), ``min_closed_loop_zeta``, ``reason``
+        (one line naming the offending pole; empty when stable).
     """
     law = realize(controller, plant, design_plant)
     if law is None or not law.is_linear:
@@ -159,6 +198,18 @@ def added_damping(plant, controller, mode: int = 1, design_plant=None) -> dict:
     A_unc[n:, :n] = 0.0
     lam_open = np.linalg.eigvals(A_unc)
     lam_closed = np.linalg.eigvals(law.closed_loop_matrix())
+    verdict = stability_verdict(lam_closed, zeta_tol=zeta_tol)
+    zo = float(open_modes.zeta[osc[mode - 1]])
+    out = {"fn_hz_open": float(open_modes.fn_hz[osc[mode - 1]]), "zeta_open": zo,
+           "stable": verdict.stable, "verdict": verdict.verdict,
+           "max_real_pole": verdict.max_real_pole,
+           "min_closed_loop_zeta": verdict.min_zeta, "reason": verdict.reason}
+    if not verdict.stable:
+        worst = verdict.offending[0]
+        out.update(fn_hz_closed=float(abs(worst) / (2 * np.pi)),
+                   zeta_closed=float(-worst.real / abs(worst)) if abs(worst) > 0 else 0.0,
+                   added=float("nan"))
+        return out
     up_o = lam_open[lam_open.imag >= 0]
     up_c = lam_closed[lam_closed.imag >= 0]
     if up_o.size != up_c.size:  # a real pair split or merged; compare on the full sets
@@ -167,9 +218,8 @@ def added_damping(plant, controller, mode: int = 1, design_plant=None) -> dict:
     i_open = int(np.argmin(np.abs(up_o - target)))
     lam = up_c[_match(up_o, up_c)[i_open]]
     fc, zc = abs(lam) / (2 * np.pi), -lam.real / abs(lam)
-    zo = float(open_modes.zeta[osc[mode - 1]])
-    return {"fn_hz_open": float(open_modes.fn_hz[osc[mode - 1]]), "zeta_open": zo,
-            "fn_hz_closed": float(fc), "zeta_closed": float(zc), "added": float(zc - zo)}
+    out.update(fn_hz_closed=float(fc), zeta_closed=float(zc), added=float(zc - zo))
+    return out
 
 
 def _amplitude_spectrum(y: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
@@ -284,13 +334,36 @@ def critical_gain(
 
 @dataclass(frozen=True)
 class SpilloverResult:
-    """Closed-loop modes of a controller on its design plant and on a larger plant."""
+    """Closed-loop modes of a controller on its design plant and on a larger plant.
+
+    Attributes
+    ----------
+    design, evaluation : ModalProperties
+        Closed-loop modes on the design (reduced) plant and on the evaluation plant.
+    verdict_design, verdict_evaluation : StabilityVerdict
+        Stability verdicts of both loops.
+    offending : list of dict
+        One row per offending (unstable or marginal) closed-loop pole of the evaluation
+        loop: ``real``, ``imag`` (1/s, rad/s), ``fn_hz``, ``zeta``, ``continues`` (the
+        uncoupled open-loop pole it continues: ``"plant mode k"`` or ``"controller"``),
+        ``open_fn_hz`` and ``residual`` (True when that plant mode has no counterpart
+        within 1 % in frequency among the design plant's modes: spillover onto a
+        residual mode).
+    """
 
     design: ModalProperties
     evaluation: ModalProperties
     stable_design: bool
     stable_evaluation: bool
     max_real_evaluation: float
+    verdict_design: StabilityVerdict | None = None
+    verdict_evaluation: StabilityVerdict | None = None
+    offending: tuple = ()
+
+    @property
+    def verdict(self) -> str:
+        """Verdict of the evaluation loop (the one that matters)."""
+        return self.verdict_evaluation.verdict
 
     def to_dataframe(self):
         import pandas as pd
@@ -299,16 +372,53 @@ class SpilloverResult:
         e = self.evaluation.to_dataframe().assign(plant="evaluation")
         return pd.concat([d, e], ignore_index=True)
 
+    def offending_table(self):
+        """The offending poles of the evaluation loop as a DataFrame."""
+        import pandas as pd
 
-def spillover_check(controller, design_plant, evaluation_plant) -> SpilloverResult:
+        return pd.DataFrame(list(self.offending),
+                            columns=["real", "imag", "fn_hz", "zeta", "continues",
+                                     "open_fn_hz", "residual"])
+
+    def to_dict(self) -> dict:
+        """JSON-friendly summary."""
+        return {"verdict_design": self.verdict_design.to_dict(),
+                "verdict_evaluation": self.verdict_evaluation.to_dict(),
+                "offending": [dict(r) for r in self.offending]}
+
+
+def spillover_check(controller, design_plant, evaluation_plant, *,
+                    zeta_tol: float = ZETA_TOL) -> SpilloverResult:
     """Evaluate a controller designed (normalised) on ``design_plant`` on a larger plant.
 
     The gains are fixed on the design plant (``design_plant=`` of :func:`closed_loop`);
-    the same sensor and actuator names must exist on both plants.
+    the same sensor and actuator names must exist on both plants. The result carries the
+    stability verdict of both loops and, for an unstable or marginal evaluation loop,
+    the offending poles with the plant mode each continues and whether that mode is a
+    residual mode (absent from the design plant: spillover).
     """
     d = closed_loop_modes(design_plant, controller, design_plant)
     e = closed_loop_modes(evaluation_plant, controller, design_plant)
+    vd = stability_verdict(d.eigenvalues, zeta_tol=zeta_tol)
+    ve = stability_verdict(e.eigenvalues, zeta_tol=zeta_tol)
+    rows = []
+    if not ve.stable:
+        design_fn = closed_loop_modes(design_plant).fn_hz
+        law = realize(controller, evaluation_plant, design_plant)
+        lam_c, lam_o, labels = _origins(law)
+        for p in ve.offending:
+            i = int(np.argmin(np.abs(lam_c - p)))
+            o = lam_o[i]
+            fo = abs(o) / (2 * np.pi)
+            residual = labels[i].startswith("plant") and not np.any(
+                np.abs(design_fn - fo) <= 0.01 * fo)
+            rows.append({"real": float(p.real), "imag": float(p.imag),
+                         "fn_hz": float(abs(p) / (2 * np.pi)),
+                         "zeta": float(-p.real / abs(p)) if abs(p) > 0 else float("nan"),
+                         "continues": labels[i], "open_fn_hz": float(fo),
+                         "residual": bool(residual)})
     return SpilloverResult(
-        design=d, evaluation=e, stable_design=d.stable, stable_evaluation=e.stable,
-        max_real_evaluation=float(np.max(e.eigenvalues.real)),
+        design=d, evaluation=e, stable_design=vd.stable, stable_evaluation=ve.stable,
+        max_real_evaluation=float(np.max(e.eigenvalues.real)), verdict_design=vd,
+        verdict_evaluation=ve, offending=tuple(rows),
     )

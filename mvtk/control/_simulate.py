@@ -25,6 +25,7 @@ from ..errors import ConvergenceError, DimensionError, ParameterError
 from ._controllers import FeedbackLaw, _index, plant_state_space
 from ._second_order import SecondOrderSystem
 from ._statespace import StateSpace
+from ._threads import one_blas_thread
 
 __all__ = ["closed_loop", "simulate", "release_state", "Disturbance", "realize"]
 
@@ -243,10 +244,12 @@ def _march(Phi: np.ndarray, Gam: np.ndarray, x0: np.ndarray, E: np.ndarray | Non
         if F is not None:
             nxt = nxt + F[(block - 1) * N:, b]
         starts[:, b + 1] = nxt
-    Y = P @ starts
+    # row b*block + j of Y is the state Phi^(j+1) start_b (+ forced part): the product
+    # comes out in sample order, no transposed copy
+    Y = starts.T @ P.T
     if F is not None:
-        Y += F
-    X[1:] = Y.reshape(block, N, nb).transpose(2, 0, 1).reshape(nb * block, N)[:steps]
+        Y += F.T
+    X[1:] = Y.reshape(nb * block, N)[:steps]
     return X
 
 
@@ -333,6 +336,7 @@ def _integrate(law: FeedbackLaw, Bx: np.ndarray, Su: np.ndarray, E, X0, t, metho
     return sol.y.T
 
 
+@one_blas_thread
 def simulate(
     plant,
     controller=None,

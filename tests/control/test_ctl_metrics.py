@@ -26,6 +26,7 @@ from mvtk.control import (
 )
 from mvtk.control._cli import add_parser
 from mvtk.control._compare import switching_peak
+from mvtk.control._stability import SUMMARY_COLUMNS
 from mvtk.errors import ConfigError, DimensionError, ParameterError
 
 F1 = 13.26
@@ -130,7 +131,9 @@ def test_comparison_result_layout(paper_comparison):
     df = paper_comparison.to_dataframe()
     assert list(df.index) == ["open loop", "PPF", "SRF", "Lyapunov"]
     assert list(df.columns) == ["settling_time_s", "fn1_hz", "zeta1", "added_damping1",
-                                "peak_reduction_db", "peak_voltage", "rms_voltage"]
+                                "peak_reduction_db", "peak_voltage", "rms_voltage",
+                                *SUMMARY_COLUMNS]
+    assert df["stable"].all() and (df["verdict"] == "stable").all()
     d = paper_comparison.to_dict()
     assert d["rows"][0]["settling_time_s"] is None  # inf -> None for JSON
     assert set(paper_comparison.simulations) == set(df.index)

@@ -29,6 +29,7 @@ def test_ppf_designed_on_se_is_stable_on_full_model(plants):
     ctrl = PPF([(f1, 0.4, 0.3)], sensor="tip")
     res = spillover_check(ctrl, design, full)
     assert res.stable_design and res.stable_evaluation
+    assert res.verdict == "stable" and res.offending == ()
     # mode-1 closed-loop damping on the SE and on the full model agree: the SE keeps
     # mode 1 and the static flexibility (static correction) exact enough
     z_se = added_damping(design, ctrl, 1, design_plant=design)["zeta_closed"]
