@@ -1,12 +1,13 @@
 # mvtk: two entry points.  `make report` runs the smart-beam study to an HTML report,
 # `make test` lints and runs the whole test suite.  Both create .venv on first use.
+# `make docs` builds the documentation site (docs/_build/html).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 OUT    ?= reports/smart_beam
 
-.PHONY: report test lint bench clean
+.PHONY: report test lint bench docs clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -18,7 +19,7 @@ report: $(STAMP)
 	$(BIN)/mvtk run data/smart_beam/study.toml --out $(OUT)
 
 lint: $(STAMP)
-	$(BIN)/ruff check mvtk tests benchmarks data
+	$(BIN)/ruff check mvtk tests benchmarks data docs
 
 test: $(STAMP) lint
 	$(BIN)/python -m pytest
@@ -26,5 +27,11 @@ test: $(STAMP) lint
 bench: $(STAMP)
 	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done
 
+# the documentation site: warnings are errors, notebooks executed, links and API checked
+docs: $(STAMP)
+	rm -rf docs/_build/html
+	$(BIN)/python -m sphinx -b html -W --keep-going -q docs docs/_build/html
+	$(BIN)/python docs/check_site.py docs/_build/html
+
 clean:
-	rm -rf $(VENV) reports/*/ .pytest_cache
+	rm -rf $(VENV) reports/*/ .pytest_cache docs/_build docs/_generated

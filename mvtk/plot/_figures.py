@@ -115,7 +115,7 @@ def plot_decay(
     x : array, shape (n,)
         The (band-passed) decay signal.
     envelope : array, shape (n,), optional
-        Measured envelope (e.g. |Hilbert transform|).
+        Measured envelope (e.g. the modulus of the Hilbert transform).
     fit : array, shape (n,), optional
         Fitted envelope A exp(-zeta omega t), plotted as +/- curves.
     """
@@ -156,7 +156,7 @@ def plot_mode_shapes(
         Node coordinates in m (x, y used).
     uz : array, shape (n_nodes, n_modes)
         Out-of-plane displacement of each node in each mode (e.g. ``FEModel.expand``
-        of the mode vectors, component ``uz``). Each mode is scaled to max |uz| = 1.
+        of the mode vectors, component ``uz``). Each mode is scaled to a largest absolute ``uz`` of 1.
     fn_hz : sequence of float, length n_modes
         Eigenfrequencies in Hz (titles).
     """

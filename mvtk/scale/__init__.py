@@ -3,8 +3,8 @@
 dask (``pip install "mvtk[scale]"``) is imported only inside the functions; without it
 they raise :class:`mvtk.errors.MissingDependencyError` with the pip command.
 
-Entry points
-------------
+Functions
+---------
 ``open_campaign(paths_or_glob, *, format, concat, on_error, chunks, **read_options)``
     Many files -> one lazy Dataset (``record`` dim or joined in time), every bad file
     reported at once.

@@ -1,0 +1,124 @@
+"""Check the built documentation site: internal links and API coverage.
+
+Usage: ``python docs/check_site.py docs/_build/html`` (run by ``make docs``).
+
+- every relative ``href``/``src`` in every HTML page points at an existing file, and
+  every ``#fragment`` at an ``id`` (or ``name``) in the target page;
+- every public name (``__all__``) of every documented subpackage is in the site's
+  ``objects.inv`` (documented in place, or re-exported from where it is documented).
+
+Exits 1 with one line per problem, 0 when the site is clean. External links are not
+followed (the build machines have no network); they are listed with ``--external``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+from urllib.parse import unquote, urlsplit
+
+sys.path.insert(0, str(Path(__file__).resolve().parent / "_ext"))
+
+
+class _Page(HTMLParser):
+    def __init__(self) -> None:
+        super().__init__()
+        self.links: list[str] = []
+        self.ids: set[str] = set()
+
+    def handle_starttag(self, tag, attrs):
+        d = dict(attrs)
+        for key in ("id", "name"):
+            if d.get(key):
+                self.ids.add(d[key])
+        for key in ("href", "src"):
+            if d.get(key):
+                self.links.append(d[key])
+
+
+def _parse(path: Path) -> _Page:
+    page = _Page()
+    page.feed(path.read_text(encoding="utf-8", errors="replace"))
+    return page
+
+
+def check_links(root: Path) -> tuple[list[str], list[str]]:
+    """Broken internal links as messages, and the external links seen."""
+    pages = {p.resolve(): _parse(p) for p in root.rglob("*.html")}
+    problems, external = [], []
+    for path, page in pages.items():
+        for link in page.links:
+            parts = urlsplit(link)
+            if parts.scheme in ("http", "https", "mailto", "ftp"):
+                external.append(link)
+                continue
+            if parts.scheme == "data" or link.startswith("javascript:"):
+                continue
+            target = path if not parts.path else (path.parent / unquote(parts.path)).resolve()
+            if target.is_dir():
+                target = target / "index.html"
+            rel = path.relative_to(root.resolve())
+            if not target.exists():
+                problems.append(f"{rel}: link {link!r} -> missing file")
+                continue
+            if parts.fragment and target.suffix == ".html":
+                ids = pages[target].ids if target in pages else _parse(target).ids
+                if unquote(parts.fragment) not in ids:
+                    problems.append(f"{rel}: link {link!r} -> no anchor #{parts.fragment}")
+    return problems, sorted(set(external))
+
+
+def check_api(root: Path) -> list[str]:
+    """Public names missing from objects.inv."""
+    import importlib
+
+    import mvtk_docs
+    from sphinx.util.inventory import InventoryFile
+
+    with open(root / "objects.inv", "rb") as fh:
+        inv = InventoryFile.load(fh, "", lambda base, uri: uri)
+    documented = {name for entries in inv.values() for name in entries}
+    problems = []
+    for package in mvtk_docs.API_PACKAGES:
+        modname = f"mvtk.{package}"
+        try:
+            module = importlib.import_module(modname)
+        except ModuleNotFoundError:
+            continue
+        for name in getattr(module, "__all__", []):
+            obj = getattr(module, name)
+            home = mvtk_docs._home_package(obj) or modname
+            if f"{modname}.{name}" in documented or f"{home}.{name}" in documented:
+                continue
+            if getattr(obj, "__name__", None) and f"{obj.__module__}.{obj.__name__}" in documented:
+                continue
+            problems.append(f"API reference: {modname}.{name} is public (__all__) but "
+                            "not documented")
+    return problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("site", type=Path, help="built HTML folder (docs/_build/html)")
+    parser.add_argument("--external", action="store_true", help="list external links")
+    args = parser.parse_args(argv)
+    if not (args.site / "index.html").is_file():
+        print(f"check_site: {args.site} has no index.html; build the docs first",
+              file=sys.stderr)
+        return 2
+    problems, external = check_links(args.site)
+    problems += check_api(args.site)
+    if args.external:
+        print("\n".join(external))
+    for p in problems:
+        print(p, file=sys.stderr)
+    n_pages = sum(1 for _ in args.site.rglob("*.html"))
+    print(f"check_site: {n_pages} pages, {len(problems)} problem(s), "
+          f"{len(external)} external link(s) not followed")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

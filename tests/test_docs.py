@@ -1,0 +1,72 @@
+"""The documentation generators and the site checker (the site itself: ``make docs``)."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+sys.path.insert(0, str(ROOT / "docs"))
+
+import mvtk_docs  # noqa: E402
+
+
+def test_every_public_name_has_an_api_entry():
+    for package in mvtk_docs.API_PACKAGES:
+        modname = f"mvtk.{package}"
+        if importlib.util.find_spec(modname) is None:
+            continue
+        page = mvtk_docs.api_page(package)
+        module = importlib.import_module(modname)
+        for name in module.__all__:
+            assert f":: {name}\n" in page or f"rubric:: {name}\n" in page, (modname, name)
+
+
+def test_reexports_point_to_their_home():
+    page = mvtk_docs.api_page("scale")
+    assert "Re-exported from :obj:`mvtk.io.open_campaign`" in page
+
+
+def test_cli_reference_lists_every_command():
+    from mvtk.cli import build_parser
+
+    text = mvtk_docs.cli_page()
+    sub = next(a for a in build_parser()._actions if a.__class__.__name__ == "_SubParsersAction")
+    for name in sub.choices:
+        assert f"## `mvtk {name}`" in text
+
+
+def _site(tmp_path: Path, body: str) -> Path:
+    (tmp_path / "index.html").write_text(
+        f'<html><body><h1 id="top">x</h1>{body}</body></html>', encoding="utf-8")
+    (tmp_path / "other.html").write_text('<p id="here">y</p>', encoding="utf-8")
+    return tmp_path
+
+
+def test_site_checker_finds_broken_internal_links(tmp_path):
+    check_site = importlib.import_module("check_site")
+    good = _site(tmp_path, '<a href="other.html#here">ok</a><a href="#top">t</a>'
+                           '<a href="https://example.org/x">ext</a>')
+    problems, external = check_site.check_links(good)
+    assert problems == [] and external == ["https://example.org/x"]
+    bad = _site(tmp_path, '<a href="missing.html">m</a><a href="other.html#nope">n</a>')
+    problems, _ = check_site.check_links(bad)
+    assert len(problems) == 2
+    assert "missing.html" in problems[0] and "no anchor #nope" in problems[1]
+
+
+def test_site_checker_refuses_an_unbuilt_site(tmp_path, capsys):
+    check_site = importlib.import_module("check_site")
+    assert check_site.main([str(tmp_path)]) == 2
+    assert "build the docs first" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("sphinx") is None, reason="sphinx not installed")
+def test_conf_lists_the_generator_extension():
+    text = (ROOT / "docs" / "conf.py").read_text(encoding="utf-8")
+    assert '"mvtk_docs"' in text and 'nb_execution_raise_on_error = True' in text
