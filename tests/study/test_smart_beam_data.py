@@ -72,8 +72,19 @@ def test_generator_reproduces_the_committed_files(tmp_path):
     assert (DATA / "SYNTHETIC_smart_beam_broadband.csv").stat().st_size < 2e6
     # 6.5 MB with the scan test's FRFs (13 points x 3201 lines, complex, + coherence)
     assert sum(p.stat().st_size for p in DATA.glob("SYNTHETIC_*")) < 7e6
-    for name in ("SYNTHETIC_smart_beam_scan.uff", "SYNTHETIC_smart_beam_scan_geometry.csv"):
-        assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
+    name = "SYNTHETIC_smart_beam_scan_geometry.csv"
+    assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
+    # the scan FRFs depend on 13 more shape values per mode, rounded to 1e-7: a value on
+    # a rounding boundary can flip between eigensolver runs, so compare numerically
+    pyuff = pytest.importorskip("pyuff")
+    new = pyuff.UFF(str(tmp_path / "SYNTHETIC_smart_beam_scan.uff")).read_sets()
+    old = pyuff.UFF(str(DATA / "SYNTHETIC_smart_beam_scan.uff")).read_sets()
+    assert len(new) == len(old) == 27
+    assert new[0]["node_nums"] == old[0]["node_nums"]
+    for a, b in zip(new[1:], old[1:]):
+        assert (a["rsp_node"], a["func_type"]) == (b["rsp_node"], b["func_type"])
+        np.testing.assert_allclose(a["data"], b["data"], rtol=0,
+                                   atol=1e-6 * np.max(np.abs(b["data"])))
 
 
 @pytest.mark.slow

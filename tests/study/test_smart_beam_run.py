@@ -71,7 +71,14 @@ def test_table_values_against_references(out_dir):
     assert (ctl["peak_voltage_V"] <= 100.0).all() and ctl["voltage_within_limit"].all()
     assert ctl.loc["Lyapunov", "peak_voltage_V"] == pytest.approx(100.0)
     m_per_v = ctl.loc["PPF", "peak_moment_Nm"] / ctl.loc["PPF", "peak_voltage_V"]
-    assert m_per_v == pytest.approx(1.4913e-4, rel=1e-3)  # updated steel E 212.6 GPa
+    # the paper's eq. 7 with the UPDATED steel modulus (patch 30 mm wide)
+    from mvtk.fe import paper_eq7_moment_per_volt
+
+    e_steel = _table(out_dir, "updating_parameters").set_index("parameter").loc[
+        "materials.steel.E", "updated"]
+    eq7 = paper_eq7_moment_per_volt(E_p=66.667e9, E_a=3.546e9, E_b=e_steel, t_p=0.25e-3,
+                                    t_a=36e-6, t_b=0.5e-3, d31=-210e-12, width=0.030)
+    assert m_per_v == pytest.approx(abs(eq7), rel=1e-3)
     # PPF small-signal added damping: G / (4 zf) = 0.1 / 1.2 (PHYSICS.md, single mode)
     assert ctl.loc["PPF", "zeta_mode1"] == pytest.approx(0.1 / 1.2 + 5.84e-4, rel=0.35)
 
