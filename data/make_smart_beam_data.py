@@ -81,19 +81,55 @@ DECIMATE_BB = 16  # -> 1250 Hz stored (1/fs = 8e-4 s exactly in the UFF header)
 FS_OUT_BB = FS_SIM_BB / DECIMATE_BB
 AA_CUTOFF_BB_HZ = 400.0
 N_HITS_BB, RECORD_BB_S, PULSE_BB_S = 3, 8.0, 0.5e-3
+SCAN_FMAX_HZ = 400.0  # scan-test FRFs are exported from 0 to this frequency
 
 # Rayleigh pair of the paper's measured damping (PHYSICS.md section 2)
 ZETA1, F1 = 5.84e-4, 13.26
 ZETA2, F2 = 1.32e-3, 41.14
 
-# The SYNTHETIC specimen: the nominal structure file with these two values (what the
-# study's model updating should recover; study.toml [truth])
+# The SYNTHETIC specimen. It is NOT the nominal model with two other parameter values
+# (that would be an "inverse crime": updating would recover them exactly). It differs from
+# the nominal structure file in ways no parameter of the study's model describes:
 STRUCTURE = Path(__file__).resolve().parent / "structures" / "smart_beam.toml"
-TRUTH = {"materials.steel.E": 212.57e9, "boundary.clamp_stiffness": 383.3}
-N_TRUTH_MODES = 12  # FE modes superposed (up to about 420 Hz)
+SPECIMEN = {
+    # finer mesh than the nominal 5 mm (discretisation error of the study model)
+    "element_size_m": 0.0025,
+    # steel sheet thickness at the upper end of a 0.5 mm sheet's tolerance (+1.6 %)
+    "steel_thickness_m": 0.508e-3,
+    # patch bonded 0.3 mm further from the clamp than drawn, with a thicker bond line
+    "patch_offset_x_m": 0.3e-3,
+    "bond_thickness_m": 40e-6,
+    # the tip accelerometer and its cable share (nominal model: massless sensor)
+    "sensor_mass_kg": 1.0e-3,
+    # a clamp that is stiffer at its two bolts than between them: rotational stiffness
+    # 0.35 + two Gaussian bumps (sigma 12 mm) at the bolts, scaled to the mean below
+    "clamp_bolts_y_m": (0.0333, 0.0998),
+    "clamp_bolt_sigma_m": 0.012,
+    "clamp_floor": 0.35,
+    # steel modulus and mean clamp stiffness (N m/rad per m): chosen so that the
+    # specimen's first two modes are the paper's measured 13.26 / 41.14 Hz (fitted once
+    # with scipy.optimize.least_squares on this model; tests/study checks it)
+    "steel_E_Pa": 216.3e9,
+    "clamp_stiffness_mean": 430.8,
+}
+N_TRUTH_MODES = 12  # FE modes superposed (up to about 510 Hz)
 IMPACT_XY = (0.170, 0.110)  # m
 SENSOR_XY = (0.180, 0.020)  # m (tip sensor, off the centre line so torsion is seen)
 TIP_XY = (0.180, 0.0665)  # m (laser on the tip centre line for the free decay)
+# scanning-laser (roving response) test: a 4 x 3 grid + the driving point, +z velocity
+SCAN_X = (0.060, 0.100, 0.140, 0.180)
+SCAN_Y = (0.010, 0.0665, 0.123)
+
+
+def scan_points() -> list[tuple[int, float, float]]:
+    """Test nodes of the scan test: (node label, x, y) in m; node 101 is the driving point."""
+    pts = [(100 + 1 + i, IMPACT_XY[0], IMPACT_XY[1]) for i in range(1)]
+    k = 1
+    for x in SCAN_X:
+        for y in SCAN_Y:
+            k += 1
+            pts.append((100 + k, x, y))
+    return pts
 
 
 @dataclass(frozen=True)
@@ -106,6 +142,7 @@ class Mode:
     phi_force: float
     phi_sensor: float
     phi_tip: float
+    phi_scan: tuple[float, ...] = ()
 
 
 def rayleigh_pair(f1: float = F1, z1: float = ZETA1, f2: float = F2, z2: float = ZETA2):
@@ -121,31 +158,85 @@ def rayleigh_zeta(fn_hz: float, alpha: float, beta: float) -> float:
     return alpha / (2 * w) + beta * w / 2
 
 
-def truth_model():
-    """The truth FE model: the nominal structure file with the :data:`TRUTH` values."""
-    from mvtk.fe import build_model, load_structure, set_by_path
+def clamp_profile(y: np.ndarray, spec: dict = SPECIMEN) -> np.ndarray:
+    """Relative rotational clamp stiffness along the clamped edge (mean 1 per unit length)."""
+    y = np.asarray(y, dtype=float)
+    return spec["clamp_floor"] + sum(
+        np.exp(-0.5 * ((y - b) / spec["clamp_bolt_sigma_m"]) ** 2) for b in spec["clamp_bolts_y_m"])
 
-    desc = load_structure(STRUCTURE)
-    for path, value in TRUTH.items():
-        desc = set_by_path(desc, path, value, create=True)
-    return build_model(desc)
+
+def specimen_description(spec: dict = SPECIMEN) -> dict:
+    """Structure description of the specimen: what the structure TOML CAN express."""
+    from mvtk.fe import load_structure, set_by_path
+
+    d = load_structure(STRUCTURE)
+    d = set_by_path(d, "materials.steel.E", spec["steel_E_Pa"])
+    d = set_by_path(d, "boundary.clamp_stiffness", spec["clamp_stiffness_mean"], create=True)
+    d = set_by_path(d, "mesh.element_size", spec["element_size_m"])
+    d = set_by_path(d, "structure.layers.0.thickness", spec["steel_thickness_m"])
+    patch = dict(d["patches"][0])
+    patch["x0"] += spec["patch_offset_x_m"]
+    patch["x1"] += spec["patch_offset_x_m"]
+    layers = [dict(layer) for layer in patch["layers"]]
+    layers[0]["thickness"] = spec["bond_thickness_m"]
+    patch["layers"] = layers
+    d["patches"] = [patch, *d["patches"][1:]]
+    return d
+
+
+def truth_model(spec: dict = SPECIMEN):
+    """The SYNTHETIC specimen's FE model (see :data:`SPECIMEN`).
+
+    :func:`specimen_description` plus what a structure file of the nominal model cannot
+    express: the clamp's rotational stiffness redistributed along the edge by
+    :func:`clamp_profile` (same mean per metre) and the sensor's point mass on ux, uy, uz.
+    """
+    import dataclasses
+
+    import scipy.sparse as sp
+
+    from mvtk.fe import build_model
+
+    m = build_model(specimen_description(spec))
+    nodes = m.node_set("x0")
+    y = m.nodes[nodes, 1]
+    order = np.argsort(y)
+    nodes, y = nodes[order], y[order]
+    trib = np.zeros_like(y)
+    trib[:-1] += np.diff(y) / 2
+    trib[1:] += np.diff(y) / 2
+    w = clamp_profile(y, spec)
+    w = w / (np.sum(w * trib) / np.sum(trib))
+    rows = np.array([m.dof_index(n, "ry") for n in nodes])
+    dk = spec["clamp_stiffness_mean"] * (w - 1.0) * trib
+    K = m.K + sp.csr_matrix((dk, (rows, rows)), shape=m.K.shape)
+    sensor = m.nearest_node([SENSOR_XY[0], SENSOR_XY[1], 0.0])
+    rows = [m.dof_index(sensor, c) for c in ("ux", "uy", "uz")]
+    M = m.M + sp.csr_matrix((np.full(3, spec["sensor_mass_kg"]), (rows, rows)), shape=m.M.shape)
+    return dataclasses.replace(m, K=sp.csr_matrix(K), M=sp.csr_matrix(M),
+                               name="SYNTHETIC smart-beam specimen")
 
 
 def truth_modes(n_modes: int = N_TRUTH_MODES) -> list[Mode]:
-    """The truth structure's lowest FE modes with the paper's Rayleigh damping.
+    """The specimen's lowest FE modes with the paper's Rayleigh damping.
 
     Mass-normalised shape values (uz, 1/sqrt(kg)) at the FE nodes nearest to the impact
-    point, the tip sensor and the laser point; each mode's sign is chosen so that its
-    value at the sensor is >= 0 (output independent of the eigensolver's sign choice).
+    point, the tip sensor, the laser point and the scan points; each mode's sign is
+    chosen so that its value at the sensor is >= 0 (output independent of the
+    eigensolver's sign choice).
     """
     from mvtk.fe import modal_analysis
 
     model = truth_model()
     res = modal_analysis(model, n_modes)
     alpha, beta = rayleigh_pair()
-    rows = {key: model.dof_index(model.nearest_node([x, y, 0.0]), "uz")
-            for key, (x, y) in (("force", IMPACT_XY), ("sensor", SENSOR_XY),
-                                ("tip", TIP_XY))}
+
+    def row(x, y):
+        return model.dof_index(model.nearest_node([x, y, 0.0]), "uz")
+
+    rows = {"force": row(*IMPACT_XY), "sensor": row(*SENSOR_XY), "tip": row(*TIP_XY)}
+    scan_rows = [row(x, y) for _, x, y in scan_points()]
+
     # the iterative eigensolver differs from run to run in the last digits: frequencies
     # to 8 significant digits and shape values (order 1-10 1/sqrt(kg)) to 1e-7 make the
     # files reproducible bit for bit (and set the numerical zeros of torsion modes on
@@ -165,7 +256,8 @@ def truth_modes(n_modes: int = N_TRUTH_MODES) -> list[Mode]:
                           rayleigh_zeta(fn, alpha, beta),
                           shape(sign * float(phi[rows["force"]])),
                           shape(sign * float(phi[rows["sensor"]])),
-                          shape(sign * float(phi[rows["tip"]]))))
+                          shape(sign * float(phi[rows["tip"]])),
+                          tuple(shape(sign * float(phi[r])) for r in scan_rows)))
     return modes
 
 
@@ -173,7 +265,8 @@ def _modal_filter(mode: Mode, quantity: str, dt: float):
     """Discrete (b, a) from force to ``quantity`` of one mode (first-order hold)."""
     w = 2 * np.pi * mode.fn_hz
     den = [1.0, 2 * mode.zeta * w, w**2]
-    num = [1.0, 0.0, 0.0] if quantity == "acceleration" else [0.0, 0.0, 1.0]
+    num = {"acceleration": [1.0, 0.0, 0.0], "velocity": [1.0, 0.0],
+           "displacement": [0.0, 0.0, 1.0]}[quantity]
     b, a, _ = signal.cont2discrete((num, den), dt, method="foh")
     return np.ravel(b), np.ravel(a)
 
@@ -292,6 +385,90 @@ def _uff(path: Path, title: str, channels: list[dict], fs: float = FS_OUT) -> No
     uff.write_sets(sets, mode="add", force_double=True)
 
 
+def scan_test(rng: np.random.Generator, modes: list[Mode], n_hits: int = 3,
+              record_s: float = RECORD_BB_S):
+    """Roving-response (scanning laser) test: mobility FRFs at the scan points, SYNTHETIC.
+
+    For each scan point, ``n_hits`` hammer hits (0.5 ms, about 5 N) at the driving point
+    and the +z velocity there, simulated at 20 kHz with sensor noise, anti-aliasing at
+    400 Hz and decimation to 1250 Hz, then an H1 impact FRF (one record per hit, force
+    window 20 ms) by :func:`mvtk.signal.frf` with explicit settings, kept from 0 to
+    400 Hz: what a vibrometer's software exports.
+    """
+    import mvtk.io
+    import mvtk.signal
+
+    dt = 1.0 / FS_SIM_BB
+    spacing = record_s + 1.0  # s between hits: every record holds one hit only
+    n = int(round((n_hits * spacing + 4.0) * FS_SIM_BB))
+    pulse_t = np.arange(int(round(PULSE_BB_S * FS_SIM_BB)) + 1) * dt
+    frfs, coherences = [], []
+    for j, _ in enumerate(scan_points()):
+        force = np.zeros(n)
+        for k in range(n_hits):
+            i0 = int(round((k * spacing + 2.0 + rng.uniform(-0.05, 0.05)) * FS_SIM_BB))
+            force[i0:i0 + pulse_t.size] += 5.0 * rng.uniform(0.8, 1.2) * np.sin(
+                np.pi * pulse_t / pulse_t[-1])
+        vel = np.zeros(n)
+        for m in modes:
+            b, a = _modal_filter(m, "velocity", dt)
+            vel += m.phi_force * m.phi_scan[j] * signal.lfilter(b, a, force)
+        f_meas = _anti_alias_and_decimate(force + rng.normal(0.0, 0.005, n), FS_SIM_BB,
+                                          AA_CUTOFF_BB_HZ, DECIMATE_BB)
+        v_meas = _anti_alias_and_decimate(vel + rng.normal(0.0, 2e-5, n), FS_SIM_BB,
+                                          AA_CUTOFF_BB_HZ, DECIMATE_BB)
+        th = mvtk.io.time_history(np.vstack([f_meas, v_meas]), fs=FS_OUT_BB,
+                                  channels=["force", "velocity"],
+                                  quantity=["force", "velocity"], units=["N", "m/s"])
+        res = mvtk.signal.frf(th, reference="force", response="velocity", excitation="impact",
+                              nperseg=int(round(record_s * FS_OUT_BB)), force_window_s=0.02,
+                              pretrigger=int(round(0.01 * FS_OUT_BB)))
+        keep = res["frf"]["frequency"].values <= SCAN_FMAX_HZ
+        frfs.append(np.asarray(res["frf"].values[0, 0, keep]))
+        coherences.append(np.asarray(res["coherence"].values[0, 0, keep]))
+        freq = res["frf"]["frequency"].values[keep]
+    return freq, np.array(frfs), np.array(coherences)
+
+
+def _scan_uff(path: Path, freq: np.ndarray, frfs: np.ndarray, coherence: np.ndarray) -> None:
+    """Test geometry (UFF 15) and mobility FRFs (UFF 58, complex, m/s per N) + coherence."""
+    import pyuff
+
+    if path.exists():
+        path.unlink()
+    uff = pyuff.UFF(str(path))
+    pts = scan_points()
+    uff.write_sets(pyuff.prepare_15(
+        node_nums=[p[0] for p in pts], def_cs=[0] * len(pts), disp_cs=[0] * len(pts),
+        color=[1] * len(pts), x=[p[1] for p in pts], y=[p[2] for p in pts],
+        z=[0.0] * len(pts)), mode="add")
+    df = float(freq[1] - freq[0])
+    sets = []
+    for (label, _, _), h, coh in zip(pts, frfs, coherence):
+        for func_type, data, ord_type, spec in ((4, h, 6, 11), (6, coh, 4, 0)):
+            sets.append(pyuff.prepare_58(
+                binary=1, id1=f"SYNTHETIC scan test, {'H1' if func_type == 4 else 'coherence'}",
+                id2=f"point {label} +z / driving point 101 +z",
+                id3=f"simulated by data/make_smart_beam_data.py (seed {SEED})",
+                id4="NOT A MEASUREMENT", id5="mvtk example data",
+                func_type=func_type, rsp_node=label, rsp_dir=3, ref_node=101, ref_dir=3,
+                data=np.asarray(data), x=freq, ordinate_spec_data_type=spec,
+                abscissa_spec_data_type=18, ordinate_len_unit_exp=1 if spec else 0,
+                ordinate_force_unit_exp=0, orddenom_spec_data_type=13 if spec else 0,
+                orddenom_force_unit_exp=1 if spec else 0, z_axis_spec_data_type=0,
+                ordinate_axis_units_lab="m/s" if spec else "NONE",
+                orddenom_axis_units_lab="N" if spec else "NONE",
+                abscissa_axis_units_lab="Hz", rsp_ent_name="beam", ref_ent_name="beam",
+                ver_num=0, load_case_id=0, ord_data_type=ord_type, abscissa_spacing=1,
+                abscissa_min=0.0, abscissa_inc=df, z_axis_value=0.0,
+                orddenom_len_unit_exp=0, orddenom_temp_unit_exp=0,
+                z_axis_len_unit_exp=0, z_axis_force_unit_exp=0, z_axis_temp_unit_exp=0,
+                z_axis_axis_units_lab="NONE", abscissa_len_unit_exp=0,
+                abscissa_force_unit_exp=0, abscissa_temp_unit_exp=0, ordinate_temp_unit_exp=0,
+            ))
+    uff.write_sets(sets, mode="add", force_double=True)
+
+
 def main(out_dir: Path) -> list[Path]:
     rng = np.random.default_rng(SEED)
     modes = truth_modes()
@@ -304,8 +481,9 @@ def main(out_dir: Path) -> list[Path]:
     common = [
         "SYNTHETIC DATA - simulated, not measured (mvtk example files)",
         f"generator: data/make_smart_beam_data.py, seed {SEED}",
-        "structure: truth smart beam (FE model of data/structures/smart_beam.toml with "
-        "clamp_stiffness 383.3 N m/rad/m, steel E 212.57 GPa), see script docstring",
+        "structure: SYNTHETIC specimen (not the nominal model: finer mesh, 0.508 mm steel, "
+        "patch +0.3 mm, 40 um bond, 1 g sensor mass, bolted clamp of non-uniform "
+        "stiffness), see data/smart_beam/README.md",
     ]
     truth = ("truth modes: " + "; ".join(f"{m.name} {m.fn_hz:.3f} Hz zeta {m.zeta:.3e}"
                                          for m in modes))
@@ -348,6 +526,18 @@ def main(out_dir: Path) -> list[Path]:
              "spec_data_type": 12, "units": "m/s^2"},
         ], fs=fs)
         written.append(p)
+    freq, scan, scan_coh = scan_test(rng, modes)
+    p = out_dir / "SYNTHETIC_smart_beam_scan.uff"
+    _scan_uff(p, freq, scan, scan_coh)
+    written.append(p)
+    p = out_dir / "SYNTHETIC_smart_beam_scan_geometry.csv"
+    with p.open("w", encoding="utf-8", newline="\n") as fh:
+        fh.write("# SYNTHETIC scan test geometry: test node labels and positions (m), global "
+                 "axes of the FE model; node 101 is the driving point (hammer +z)\n")
+        fh.write("node,x,y,z\n")
+        for label, x, y in scan_points():
+            fh.write(f"{label},{x:.4f},{y:.4f},0.0\n")
+    written.append(p)
     p = out_dir / "SYNTHETIC_smart_beam_decay.uff"
     _uff(p, "free decay", [
         {"name": "tip displacement", "data": disp_d, "node": 6, "ref_node": 0,

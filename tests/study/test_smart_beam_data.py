@@ -40,17 +40,18 @@ def test_files_are_labelled_synthetic_and_csv_equals_uff(test):
 
 def test_truth_modes_carry_the_paper_damping():
     modes = gen.truth_modes()
-    # the truth FE model (rounded truth parameters) meets the paper's measured
-    # frequencies to 1e-5 and so carries its damping to 1e-4
-    assert [m.fn_hz for m in modes[:2]] == pytest.approx([13.26, 41.14], rel=1e-5)
+    # the specimen (rounded E and mean clamp stiffness) meets the paper's measured
+    # frequencies to 5e-5 and so carries its damping to 1e-4
+    assert [m.fn_hz for m in modes[:2]] == pytest.approx([13.26, 41.14], rel=5e-5)
     assert modes[0].zeta == pytest.approx(5.84e-4, rel=1e-4)
     assert modes[1].zeta == pytest.approx(1.32e-3, rel=1e-4)
     alpha, beta = gen.rayleigh_pair()
     for m in modes:  # every mode: the same Rayleigh pair
         w = 2 * np.pi * m.fn_hz
         assert m.zeta == pytest.approx(alpha / (2 * w) + beta * w / 2, rel=1e-12)
-    # torsion modes: no uz on the centre line (laser point), bending modes do have it
-    assert abs(modes[1].phi_tip) < 1e-6 * abs(modes[0].phi_tip)
+    # torsion modes: almost no uz on the centre line (laser point; the 1 g sensor off
+    # the centre line breaks the symmetry by a few %), bending modes do have it
+    assert abs(modes[1].phi_tip) < 0.05 * abs(modes[0].phi_tip)
     assert abs(modes[2].phi_tip) > 0.1 * abs(modes[0].phi_tip)
     # mass-normalised tip value of bending 1 against a uniform cantilever strip of the
     # same mass (beam function 2 / sqrt(m) at the tip): within 15 % (patch, clamp)
@@ -69,4 +70,52 @@ def test_generator_reproduces_the_committed_files(tmp_path):
                  "SYNTHETIC_smart_beam_broadband.csv"):
         assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
     assert (DATA / "SYNTHETIC_smart_beam_broadband.csv").stat().st_size < 2e6
-    assert sum(p.stat().st_size for p in DATA.glob("SYNTHETIC_*")) < 6e6
+    # 6.5 MB with the scan test's FRFs (13 points x 3201 lines, complex, + coherence)
+    assert sum(p.stat().st_size for p in DATA.glob("SYNTHETIC_*")) < 7e6
+    name = "SYNTHETIC_smart_beam_scan_geometry.csv"
+    assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
+    # the scan FRFs depend on 13 more shape values per mode, rounded to 1e-7: a value on
+    # a rounding boundary can flip between eigensolver runs, so compare numerically
+    pyuff = pytest.importorskip("pyuff")
+    new = pyuff.UFF(str(tmp_path / "SYNTHETIC_smart_beam_scan.uff")).read_sets()
+    old = pyuff.UFF(str(DATA / "SYNTHETIC_smart_beam_scan.uff")).read_sets()
+    assert len(new) == len(old) == 27
+    assert new[0]["node_nums"] == old[0]["node_nums"]
+    for a, b in zip(new[1:], old[1:]):
+        assert (a["rsp_node"], a["func_type"]) == (b["rsp_node"], b["func_type"])
+        np.testing.assert_allclose(a["data"], b["data"], rtol=0,
+                                   atol=1e-6 * np.max(np.abs(b["data"])))
+
+
+@pytest.mark.slow
+def test_no_inverse_crime_the_nominal_model_cannot_reproduce_the_specimen():
+    """The specimen differs from the nominal model in ways no study parameter describes.
+
+    Built with the specimen's own steel modulus and mean clamp stiffness, the nominal
+    model (5 mm mesh, 0.5 mm steel, drawn patch and bond, no sensor mass, uniform clamp)
+    still misses the specimen's frequencies: updating E and the clamp stiffness cannot
+    drive every residual to zero (issue: "inverse crime" of model updating studies).
+    """
+    from mvtk.fe import build_model, load_structure, modal_analysis, set_by_path
+
+    truth = np.array([m.fn_hz for m in gen.truth_modes(6)])
+    desc = load_structure(gen.STRUCTURE)
+    desc = set_by_path(desc, "materials.steel.E", gen.SPECIMEN["steel_E_Pa"])
+    desc = set_by_path(desc, "boundary.clamp_stiffness", gen.SPECIMEN["clamp_stiffness_mean"],
+                       create=True)
+    nominal = modal_analysis(build_model(desc), 6).fn_hz
+    err = nominal / truth - 1
+    # every stated difference moves the modes by 0.1-3 %, not by round-off
+    assert np.max(np.abs(err)) > 0.01, err
+    assert np.min(np.abs(err)) > 1e-4, err
+    # and the errors are not one common scale factor (that a modulus change would absorb)
+    assert np.ptp(err) > 0.005, err
+    # the specimen's stated differences are all there: finer mesh, thicker steel,
+    # shifted patch, thicker bond, sensor mass and a non-uniform clamp
+    spec_desc = gen.specimen_description()
+    assert spec_desc["mesh"]["element_size"] < desc["mesh"]["element_size"]
+    assert spec_desc["structure"]["layers"][0]["thickness"] > 0.5e-3
+    assert spec_desc["patches"][0]["x0"] > desc["patches"][0]["x0"]
+    assert gen.SPECIMEN["sensor_mass_kg"] > 0
+    w = gen.clamp_profile(np.linspace(0.0, 0.133, 200))
+    assert w.max() / w.min() > 2.0

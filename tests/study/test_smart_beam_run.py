@@ -42,14 +42,20 @@ def test_every_stage_ran_and_every_check_passed(out_dir):
 
 def test_table_values_against_references(out_dir):
     t2 = _table(out_dir, "table2_frequencies")
-    # updated model meets the experiment (paper Table 2) to well below 0.1 %
-    assert (t2["FE updated error %"].abs() < 0.01).all()
+    # the specimen is not the nominal model with other parameter values (no inverse
+    # crime): after updating two parameters against four modes a model-form residual of
+    # 0.1-1 % remains (data/smart_beam/README.md), never round-off
+    assert (t2["FE updated error %"].abs() < 1.0).all()
+    assert t2["FE updated error %"].abs().max() > 0.05
     # nominal model too stiff, like the paper's FE (13.81 / 42.67 Hz)
     assert (t2["FE nominal error %"] > 0).all()
     prm = _table(out_dir, "updating_parameters").set_index("parameter")
-    # the updater recovers the SYNTHETIC specimen (data/make_smart_beam_data.py)
-    assert prm.loc["materials.steel.E", "updated"] == pytest.approx(212.57e9, rel=0.01)
-    assert prm.loc["boundary.clamp_stiffness", "updated"] == pytest.approx(383.3, rel=0.03)
+    # the updated parameters land near the SYNTHETIC specimen's (216.3 GPa, mean clamp
+    # 430.8 N m/rad/m) but not on them: the unmodelled sensor mass, sheet thickness and
+    # mesh are absorbed into them (data/smart_beam/README.md)
+    assert prm.loc["materials.steel.E", "updated"] == pytest.approx(216.3e9, rel=0.05)
+    assert prm.loc["boundary.clamp_stiffness", "updated"] == pytest.approx(430.8, rel=0.10)
+    assert prm.loc["materials.steel.E", "updated"] != pytest.approx(216.3e9, rel=1e-3)
     t3 = _table(out_dir, "table3_rayleigh").set_index("method")
     # the half-power pair is the paper's Table 3 pair (two-mode fit of 5.84e-4, 1.32e-3)
     assert t3.loc["half-power", "alpha [1/s]"] == pytest.approx(0.02955, rel=0.02)
@@ -65,7 +71,14 @@ def test_table_values_against_references(out_dir):
     assert (ctl["peak_voltage_V"] <= 100.0).all() and ctl["voltage_within_limit"].all()
     assert ctl.loc["Lyapunov", "peak_voltage_V"] == pytest.approx(100.0)
     m_per_v = ctl.loc["PPF", "peak_moment_Nm"] / ctl.loc["PPF", "peak_voltage_V"]
-    assert m_per_v == pytest.approx(1.4913e-4, rel=1e-3)  # updated steel E 212.6 GPa
+    # the paper's eq. 7 with the UPDATED steel modulus (patch 30 mm wide)
+    from mvtk.fe import paper_eq7_moment_per_volt
+
+    e_steel = _table(out_dir, "updating_parameters").set_index("parameter").loc[
+        "materials.steel.E", "updated"]
+    eq7 = paper_eq7_moment_per_volt(E_p=66.667e9, E_a=3.546e9, E_b=e_steel, t_p=0.25e-3,
+                                    t_a=36e-6, t_b=0.5e-3, d31=-210e-12, width=0.030)
+    assert m_per_v == pytest.approx(abs(eq7), rel=1e-3)
     # PPF small-signal added damping: G / (4 zf) = 0.1 / 1.2 (PHYSICS.md, single mode)
     assert ctl.loc["PPF", "zeta_mode1"] == pytest.approx(0.1 / 1.2 + 5.84e-4, rel=0.35)
 
@@ -108,8 +121,10 @@ def test_monte_carlo_uncertainty_section(out_dir):
     assert stats["cov"].to_numpy() == pytest.approx(stats["cov_first_order"].to_numpy(),
                                                     rel=0.20)
     inp = _table(out_dir, "uncertainty_inputs").set_index("path")
-    # mean of E is the UPDATED value (SYNTHETIC truth 212.57 GPa), not the nominal 210 GPa
-    assert inp.loc["materials.steel.E", "mean"] == pytest.approx(212.57e9, rel=0.01)
+    # mean of E is the UPDATED value, not the nominal 210 GPa
+    upd = _table(out_dir, "updating_parameters").set_index("parameter")
+    assert inp.loc["materials.steel.E", "mean"] == pytest.approx(
+        upd.loc["materials.steel.E", "updated"], rel=1e-9)
     # f ~ sqrt(E / rho) for the steel: rho enters only through the mass (about -1/2; the
     # patch mass makes it slightly smaller); E shares the strain energy with the elastic
     # clamp and the patch, so its exponent is below 1/2

@@ -21,7 +21,7 @@ def test_smart_beam_study_loads_and_resolves_files():
     assert [r["name"] for r in s.config["reduction"]["retained"]] == [
         "clamp", "actuator_x0", "actuator_x1", "sensor", "tip"]
     assert s.config["reduction"]["n_modes"] == 10
-    assert s.config["updating"]["targets_hz"] == [13.26, 41.14]
+    assert s.config["updating"]["targets_hz"] == [13.26, 41.14, 78.69, 137.78]
 
 
 def _variant(tmp_path, old: str, new: str) -> Path:
@@ -48,7 +48,7 @@ def _variant(tmp_path, old: str, new: str) -> Path:
          "measurements.decay.file: 'nope.csv' not found"),
         ('model_damping = "half_power"', 'model_damping = "guess"',
          "damping.model_damping: expected 'half_power' or 'chowdhury'"),
-        ("targets_hz = [13.26, 41.14]", "targets_hz = []",
+        ("targets_hz = [13.26, 41.14, 78.69, 137.78]", "targets_hz = []",
          "updating.targets_hz: expected a list of frequencies > 0"),
         ('sensor_node = "tip"', 'sensor_node = "toe"',
          r"control.sensor_node: \['toe'\] are not retained nodes"),
@@ -60,9 +60,9 @@ def _variant(tmp_path, old: str, new: str) -> Path:
          r"reduction.retained\[4\].xyz: expected \[x, y, z\]"),
         ("band_hz = [11.0, 15.5]", "band_hz = [15.5, 11.0]",
          "measurements.decay.band_hz: expected"),
-        ("broadband_fn_hz = [78.6, 139.0, 225.6]", "broadband_fn_hz = [30.0, 139.0]",
+        ("broadband_fn_hz = [78.7, 137.8, 224.5]", "broadband_fn_hz = [30.0, 139.0]",
          r"damping.broadband_fn_hz: expected modes above those of damping.fn_hz \(max 41.14"),
-        ("broadband_fn_hz = [78.6, 139.0, 225.6]", "broadband_fn_hz = [78.6, -1.0]",
+        ("broadband_fn_hz = [78.7, 137.8, 224.5]", "broadband_fn_hz = [78.6, -1.0]",
          "damping.broadband_fn_hz: expected a list of frequencies > 0"),
         ("[measurements.broadband]", "[measurements.broadbandx]",
          "measurements.broadbandx: unknown test; expected 'impact', 'broadband' or 'decay'"),
