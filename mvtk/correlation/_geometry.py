@@ -168,6 +168,16 @@ class Sensor:
     vector: tuple[float, float, float] | None = None
     rotation: bool = False
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "node", int(self.node))
+        if self.vector is None:
+            if self.direction not in DIRECTIONS:
+                raise ParameterError(
+                    f"sensor at node {self.node}: unknown direction {self.direction!r}; "
+                    f"expected one of {DIRECTIONS} (or a named skewed sensor with a vector)"
+                )
+            object.__setattr__(self, "rotation", self.direction[1] == "r")
+
     @property
     def label(self) -> str:
         """DOF label ``"<node><direction>"``."""

@@ -265,7 +265,8 @@ def map_sensors(
                     best = (key, kind, int(e), d, xi, eta)
         surface_d = best[3] if best is not None else np.nan
         if surf:
-            dist = surface_d if best is not None else np.inf
+            # no element under the sensor within tol: the nearest node tells how far off
+            dist = surface_d if best is not None else dn
         else:
             dist = dn
         if dist > tol:

@@ -171,8 +171,16 @@ def comac(a: Any, b: Any, *, variant: str = "signed") -> xr.DataArray:
         phase/sign-aligned onto ``a`` (by its MSF) before the sums.
     variant : {"signed", "lieven_ewins"}
         ``"signed"`` (default): ``|sum_l a_jl b_jl^*|^2 / (sum_l |a_jl|^2 sum_l |b_jl|^2)``,
-        which drops for a sensor whose sign is wrong. ``"lieven_ewins"``: the original
-        1988 form with ``(sum_l |a_jl b_jl|)^2`` in the numerator, blind to a sign error.
+        which also drops when the agreement at a DOF changes sign between modes.
+        ``"lieven_ewins"``: the original 1988 form with ``(sum_l |a_jl b_jl|)^2`` in the
+        numerator, blind to signs.
+
+    Notes
+    -----
+    COMAC is a correlation across modes at each DOF: a constant gain or sign error of
+    one sensor (the same factor in every mode) leaves it at 1. A wrongly oriented sensor
+    (reading another component) or a misplaced one lowers it; a calibration or polarity
+    error is found by :func:`ecomac`.
 
     Returns
     -------
