@@ -10,7 +10,7 @@ identifiability, unpaired modes).
 from ._pairing import Pairing, classify_modes, mac, pair_modes, target_mac
 from ._parameters import Parameter, get_path, set_path, with_values
 from ._sensitivity import Sensitivity, eigen_sensitivity
-from ._targets import FrequencyTarget, targets_from_modal_result
+from ._targets import FrequencyTarget, targets_from_modal_result, targets_from_shapes
 from ._update import HistoryEntry, UpdateResult, update
 
 __all__ = [
@@ -20,6 +20,7 @@ __all__ = [
     "with_values",
     "FrequencyTarget",
     "targets_from_modal_result",
+    "targets_from_shapes",
     "mac",
     "classify_modes",
     "pair_modes",
