@@ -60,11 +60,13 @@ def plot_mac(mac: Any, *, title: str = "MAC", annotate: bool = True):
 
 def _wire(ax, geometry, values=None, scale=0.0, color="k", lw=1.0, label=None):
     """Wireframe of a test geometry in the x-y view with optional z displacement colour."""
+    from matplotlib.collections import LineCollection
+
     xyz = geometry.xyz * 1e3
     segs = geometry.edges()
-    for k, (a, b) in enumerate(segs):
-        ax.plot(xyz[[a, b], 0], xyz[[a, b], 1], color=color, lw=lw,
-                label=label if k == 0 else None)
+    if len(segs):
+        ax.add_collection(LineCollection(xyz[segs][:, :, :2], colors=color, linewidths=lw,
+                                         label=label))
     if values is not None:
         sc = ax.scatter(xyz[:, 0], xyz[:, 1], c=values, cmap="coolwarm", vmin=-1, vmax=1,
                         s=40, edgecolors="k", linewidths=0.5, zorder=3)
@@ -135,15 +137,16 @@ def plot_test_on_mesh(model: Any, geometry: Any, *, mapping: Any = None):
     """
     fig = _figure(6.5, 4.5)
     ax = fig.add_subplot(1, 1, 1)
+    from matplotlib.collections import LineCollection
+
     xy = model.nodes[:, :2] * 1e3
     for conn in model.elements.values():
         if conn.shape[1] < 3:
-            for a, b in conn:
-                ax.plot(xy[[a, b], 0], xy[[a, b], 1], color="0.75", lw=0.6)
-            continue
-        for el in conn:
-            loop = np.append(el, el[0])
-            ax.plot(xy[loop, 0], xy[loop, 1], color="0.8", lw=0.5)
+            segs = xy[conn]
+        else:
+            nxt = np.roll(conn, -1, axis=1)
+            segs = np.stack([xy[conn.ravel()], xy[nxt.ravel()]], axis=1)
+        ax.add_collection(LineCollection(segs, colors="0.8", linewidths=0.5))
     _wire(ax, geometry, color="tab:red", lw=1.4, label="test wireframe")
     if geometry.sensors:
         v = geometry.sensor_vectors()
@@ -163,6 +166,7 @@ def plot_test_on_mesh(model: Any, geometry: Any, *, mapping: Any = None):
             q = geometry.xyz[rows] * 1e3
             ax.plot(q[:, 0], q[:, 1], "o", mfc="none", mec="tab:orange", ms=11,
                     label="between FE nodes")
+    ax.autoscale_view()
     ax.set_aspect("equal")
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
