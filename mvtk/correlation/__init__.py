@@ -1,5 +1,6 @@
 """Test-analysis correlation: test geometry, DOF mapping, MAC family, expansion, pretest.
 
+- :func:`correlate` -> :class:`CorrelationResult`: the one call of a study stage;
 - :func:`read_test_geometry` / :class:`TestGeometry`: nodes, coordinate systems, trace
   lines and sensor DOFs from UFF (15, 2411, 18, 82, 2412), TOML or CSV;
 - :func:`map_sensors` -> :class:`DofMapping`: sensors onto an FE model (nearest node or
@@ -14,6 +15,7 @@
 Shapes are ``("mode", "dof")`` DataArrays (``docs/conventions.md``).
 """
 
+from ._correlate import CorrelationResult, correlate
 from ._expansion import ExpansionResult, expand_lsq, expand_serep
 from ._fe_adapter import fe_node_ids, fe_shapes
 from ._geometry import (
@@ -50,6 +52,8 @@ from ._pretest import (
 )
 
 __all__ = [
+    "CorrelationResult",
+    "correlate",
     "DIRECTIONS",
     "CoordinateSystem",
     "Sensor",
