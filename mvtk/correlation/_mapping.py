@@ -249,6 +249,8 @@ def map_sensors(
         c = X.mean(axis=1)
         rad = np.max(np.linalg.norm(X - c[:, None, :], axis=2), axis=1)
         cand.append((key, kind, conn, c, rad))
+    lookup = np.full(model.n_nodes * 6, -1, dtype=np.int64)
+    lookup[model.dof_node * 6 + model.dof_component] = np.arange(model.n_dof)
     vecs = geometry.sensor_vectors()
     rows, cols, vals, rep = [], [], [], []
     off = []
@@ -289,7 +291,7 @@ def map_sensors(
                 c = wgt * vecs[i, a]
                 if c == 0.0:
                     continue
-                j = int(model._lookup[int(nd) * 6 + base + a])
+                j = int(lookup[int(nd) * 6 + base + a])
                 if j < 0:
                     n_con += 1
                     continue
