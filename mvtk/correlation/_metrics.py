@@ -248,7 +248,11 @@ def guyan_tam(model, observation) -> np.ndarray:
     from ..fe._solvers import factorize
 
     C = _observation(observation, model.n_dof)
-    lu = factorize(model.K)
+    try:
+        lu = factorize(model.K)
+    except ParameterError as err:
+        raise ParameterError(f"the Guyan TAM needs a non-singular K (a supported "
+                             f"structure): {err}") from err
     Z = lu.solve(_dense(C.T))  # K^-1 C'
     if not np.all(np.isfinite(Z)):
         raise ParameterError("the Guyan TAM needs a non-singular K (a supported structure)")

@@ -185,6 +185,13 @@ def _result(candidates, mp, keep, A, fn, scores, history, method, automac_max):
     )
 
 
+def _rank(A: np.ndarray) -> int:
+    """Numerical rank with a relative tolerance of 1e-8 (a mode 1e-8 times smaller than
+    the others at every candidate cannot be measured)."""
+    s = np.linalg.svd(A, compute_uv=False)
+    return int(np.sum(s > 1e-8 * s[0])) if s.size and s[0] > 0 else 0
+
+
 def effective_independence(
     model: FEModel,
     modal: Any,
@@ -233,7 +240,7 @@ def effective_independence(
     if n_sensors < m:
         raise ParameterError(f"effective independence needs at least as many sensors as target "
                              f"modes ({m}), got n_sensors={n_sensors}")
-    if np.linalg.matrix_rank(A) < m:
+    if _rank(A) < m:
         raise ParameterError("the target modes are linearly dependent on the candidate DOFs "
                              "(add candidates or drop modes)")
     keep = np.arange(A.shape[0])
@@ -252,7 +259,7 @@ def effective_independence(
             break
         drop = keep[inv == k]
         rest = keep[inv != k]
-        if np.linalg.matrix_rank(A[rest]) < m:
+        if _rank(A[rest]) < m:
             break
         hist.append({"step": len(hist) + 1, "removed": " ".join(mp.dof[i] for i in drop),
                      "E_D": float(gsum[k]),
