@@ -1,7 +1,9 @@
 """FE model updating against measured natural frequencies (and mode shapes).
 
 Parameters are numeric fields of a structure description addressed by dotted paths;
-targets are measured frequencies; :func:`update` runs a bounded, sensitivity-based
+targets are measured frequencies, optionally with mode shapes at sensors (on FE DOFs
+or observed through an :mod:`mvtk.correlation` sensor mapping, see
+:func:`targets_from_shapes`); :func:`update` runs a bounded, sensitivity-based
 least-squares fit and returns an :class:`UpdateResult` with the updated description and
 diagnostics (residuals, parameter changes and uncertainty, sensitivities,
 identifiability, unpaired modes).

@@ -875,6 +875,9 @@ def update(
       frequency errors, f_i the paired model mode),
     - ``mac_weight * w_i * (1 - MAC_i)`` for targets with a measured shape (if
       ``mac_weight > 0``),
+    - ``eigvec_weight * w_i * (s y/|y| - t/|t|)`` per sensor of each target with a
+      measured shape (if ``eigvec_weight > 0``; ``y`` model, ``t`` test shape at the
+      sensors, ``s = sign(t'y)``),
     - ``sqrt(regularization) * (x - x0)`` (Tikhonov towards the initial values),
 
     in scaled variables ``x = p / scale``. Modes are re-paired at every evaluation (MAC +

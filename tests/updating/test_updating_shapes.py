@@ -118,3 +118,25 @@ def test_weights_from_identification_quality_and_bad_input():
         update(NOMINAL, PARAMS, t, builder=build, shape_derivative="exact")
     with pytest.raises(ParameterError, match="eigvec_weight > 0 needs targets with measured"):
         update(NOMINAL, PARAMS, [100.0, 200.0], builder=build, eigvec_weight=1.0)
+
+
+def test_observed_shape_target_errors():
+    C = np.eye(3, 10)
+    with pytest.raises(ParameterError, match="observed shape needs keys 'values' and "
+                                             "'observation'"):
+        FrequencyTarget(10.0, shape={"observation": C, "nodes": [1]})
+    from mvtk.errors import DimensionError
+
+    with pytest.raises(DimensionError, match="observation has 3 rows for 2 shape values"):
+        FrequencyTarget(10.0, shape={"values": [1.0, 2.0], "observation": C})
+    with pytest.raises(ParameterError, match="finite and not all zero"):
+        FrequencyTarget(10.0, shape={"values": [0.0, 0.0, 0.0], "observation": C})
+    t = FrequencyTarget(10.0, label="m1", shape={"values": [1.0, 2.0, 3.0], "observation": C})
+    from mvtk.updating._pairing import target_mac
+
+    model = build(NOMINAL)
+    with pytest.raises(DimensionError, match=r"target m1: observation has 10 columns but the "
+                                             rf"model has {model.n_dof} free DOFs"):
+        target_mac(model, np.ones((model.n_dof, 2)), [t])
+    with pytest.raises(DimensionError, match="shapes must be a DataArray with dims"):
+        targets_from_shapes(np.ones((2, 3)), C)
