@@ -95,6 +95,33 @@ class CorrelationResult:
             "dofs": records(self.dof_table()),
         }
 
+    def add_to_report(self, section: Any, *, model: Any = None, prefix: str = "correlation",
+                      synthetic: bool = False) -> Any:
+        """Fill a :class:`mvtk.report.Section`: pairing table, per-DOF table (mapping
+        distances, COMAC, eCOMAC, suspect) and the figures of :meth:`figures`.
+
+        Tables are named ``<prefix>_pairs`` and ``<prefix>_dofs``; no pass/fail verdict
+        is added (the study decides its acceptance criteria). ``synthetic=True`` adds a
+        note that the test data are synthetic.
+        """
+        if synthetic:
+            section.note("The test shapes of this section are synthetic (computed, not "
+                         "measured).")
+        n_pairs = len(self.pairing.pairs) if self.pairing is not None else 0
+        section.text(f"{len(self.mapping.dof)} sensor DOFs mapped onto the FE model "
+                     f"({self.mapping.method}); {n_pairs} test-FE mode pairs accepted.")
+        if self.pairing is not None:
+            section.table(self.pairing_table(), f"{prefix}_pairs",
+                          caption="Test-FE mode pairs (MAC, frequency gap, swaps)",
+                          passed_column=None)
+        section.table(self.dof_table(), f"{prefix}_dofs",
+                      caption="Sensor mapping and COMAC per test DOF", passed_column=None)
+        captions = {"mac": "MAC matrix", "paired_shapes": "Paired test and FE shapes",
+                    "test_on_mesh": "FE mesh with the test wireframe and sensors"}
+        for name, fig in self.figures(model).items():
+            section.figure(fig, captions[name])
+        return section
+
     def figures(self, model: Any = None) -> dict:
         """Figures keyed by name: ``mac``, ``paired_shapes`` (with test shapes) and
         ``test_on_mesh`` (with ``model``)."""

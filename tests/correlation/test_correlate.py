@@ -57,3 +57,17 @@ def test_cli_correlate(tmp_path, capsys):
                    '[[sensors]]\nnode = 1\ndirection = "+z"\n')
     assert main(["correlate", str(bad), str(structure), "-n", "2"]) == 2
     assert "lie off the FE model" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_correlation_report_section(tmp_path):
+    from mvtk.report import Report
+
+    model, modal, geo, mp, fe = plate_setup(4)
+    res = co.correlate(geo, model, modal, fe)
+    rep = Report("correlation")
+    res.add_to_report(rep.section("Correlation"), model=model, synthetic=True)
+    assert {"correlation_pairs", "correlation_dofs"} <= set(rep.tables)
+    assert rep.n_figures == 3
+    html = rep.to_html()
+    assert "synthetic" in html and "MAC matrix" in html
