@@ -1,5 +1,6 @@
 """Figures (the only subpackage importing matplotlib, lazily, with figures built off pyplot)."""
 
+from ._correlation import plot_mac, plot_paired_shapes, plot_test_on_mesh
 from ._figures import (
     figure_to_png,
     plot_decay,
@@ -16,4 +17,7 @@ __all__ = [
     "plot_mode_shapes",
     "plot_time_responses",
     "plot_spectra",
+    "plot_mac",
+    "plot_paired_shapes",
+    "plot_test_on_mesh",
 ]

@@ -1,7 +1,9 @@
 """FE model updating against measured natural frequencies (and mode shapes).
 
 Parameters are numeric fields of a structure description addressed by dotted paths;
-targets are measured frequencies; :func:`update` runs a bounded, sensitivity-based
+targets are measured frequencies, optionally with mode shapes at sensors (on FE DOFs
+or observed through an :mod:`mvtk.correlation` sensor mapping, see
+:func:`targets_from_shapes`); :func:`update` runs a bounded, sensitivity-based
 least-squares fit and returns an :class:`UpdateResult` with the updated description and
 diagnostics (residuals, parameter changes and uncertainty, sensitivities,
 identifiability, unpaired modes).
@@ -10,7 +12,7 @@ identifiability, unpaired modes).
 from ._pairing import Pairing, classify_modes, mac, pair_modes, target_mac
 from ._parameters import Parameter, get_path, set_path, with_values
 from ._sensitivity import Sensitivity, eigen_sensitivity
-from ._targets import FrequencyTarget, targets_from_modal_result
+from ._targets import FrequencyTarget, targets_from_modal_result, targets_from_shapes
 from ._update import HistoryEntry, UpdateResult, update
 
 __all__ = [
@@ -20,6 +22,7 @@ __all__ = [
     "with_values",
     "FrequencyTarget",
     "targets_from_modal_result",
+    "targets_from_shapes",
     "mac",
     "classify_modes",
     "pair_modes",

@@ -141,6 +141,19 @@ def _sensor_rows(model: FEModel, target: FrequencyTarget, i: int) -> np.ndarray:
         raise ParameterError(f"target {target.label or i + 1}: sensor DOF: {err}") from err
 
 
+def target_rows(model: FEModel, vectors: np.ndarray, target: FrequencyTarget, i: int):
+    """Model shapes at the sensors of a shape-bearing target, shape (n_sensors, n_modes)."""
+    C = getattr(target, "observation", None)
+    if C is not None:
+        if C.shape[1] != model.n_dof:
+            raise DimensionError(
+                f"target {target.label or i + 1}: observation has {C.shape[1]} columns but "
+                f"the model has {model.n_dof} free DOFs (map the sensors on this mesh)"
+            )
+        return np.asarray(C @ vectors)
+    return vectors[_sensor_rows(model, target, i)]
+
+
 def target_mac(model: FEModel, vectors: np.ndarray, targets: Sequence[FrequencyTarget]):
     """MAC of each shape-bearing target against every model mode, shape (n_targets, n_modes).
 
@@ -149,8 +162,7 @@ def target_mac(model: FEModel, vectors: np.ndarray, targets: Sequence[FrequencyT
     out = np.full((len(targets), vectors.shape[1]), np.nan)
     for i, t in enumerate(targets):
         if t.has_shape:
-            rows = _sensor_rows(model, t, i)
-            out[i] = mac(t.shape_values, vectors[rows])[0]
+            out[i] = mac(t.shape_values, target_rows(model, vectors, t, i))[0]
     return out
 
 

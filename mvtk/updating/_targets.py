@@ -12,7 +12,7 @@ import numpy as np
 from ..errors import ConfigError, DimensionError, ParameterError
 from ..fe._model import DOF_NAMES
 
-__all__ = ["FrequencyTarget", "targets_from_modal_result"]
+__all__ = ["FrequencyTarget", "targets_from_modal_result", "targets_from_shapes"]
 
 
 def _normalise_shape(shape: Any, where: str) -> tuple[tuple[tuple[int, str], ...], np.ndarray]:
@@ -60,6 +60,32 @@ def _normalise_shape(shape: Any, where: str) -> tuple[tuple[tuple[int, str], ...
     return tuple(sensors), values
 
 
+def _observed_shape(shape: Mapping, where: str):
+    """``{"values": [...], "observation": C}``: the shape is ``C @ phi`` of the model."""
+    import scipy.sparse as sp
+
+    unknown = set(shape) - {"values", "observation", "labels"}
+    if unknown or "values" not in shape:
+        raise ParameterError(
+            f"{where}: an observed shape needs keys 'values' and 'observation' (optional "
+            f"'labels'), got {sorted(shape)}"
+        )
+    values = np.asarray(shape["values"], dtype=float).ravel()
+    C = shape["observation"]
+    C = getattr(C, "matrix", C)
+    C = sp.csr_matrix(C) if sp.issparse(C) else sp.csr_matrix(np.asarray(C, dtype=float))
+    if C.shape[0] != values.size:
+        raise DimensionError(
+            f"{where}: observation has {C.shape[0]} rows for {values.size} shape values"
+        )
+    if values.size < 2:
+        raise DimensionError(f"{where}: a mode shape needs at least 2 sensor values")
+    if not np.all(np.isfinite(values)) or not np.any(values):
+        raise ParameterError(f"{where}: shape values must be finite and not all zero")
+    labels = tuple(str(v) for v in shape.get("labels", range(values.size)))
+    return labels, values, C
+
+
 @dataclass(frozen=True, eq=False)
 class FrequencyTarget:
     """A measured natural frequency the model must reach.
@@ -78,7 +104,11 @@ class FrequencyTarget:
         Measured mode shape at sensor DOFs, either ``{(node, "uz"): value, ...}`` or
         ``{"nodes": [...], "components": [...] or "uz", "values": [...]}``. Real
         (normal-mode) values; node numbers are model node indices. Used for MAC pairing
-        and the optional 1 - MAC residuals.
+        and the optional 1 - MAC residuals. Or ``{"values": [...], "observation": C}``
+        with ``C`` an observation matrix (n_sensors, n_dof) or a
+        :class:`mvtk.correlation.DofMapping` (sensors anywhere on the mesh, skewed
+        directions): the model's shape at the sensors is ``C @ phi`` (see
+        :func:`targets_from_shapes`).
     kind : str, optional
         Mode type (``"bending"``, ``"torsion"``, ...) checked when pairing by order.
 
@@ -117,12 +147,16 @@ class FrequencyTarget:
                     f"{where}: mode must be a 1-based mode number, got {self.mode!r}"
                 )
             object.__setattr__(self, "mode", int(self.mode))
-        if self.shape is not None:
+        observation = None
+        if isinstance(self.shape, Mapping) and "observation" in self.shape:
+            sensors, values, observation = _observed_shape(self.shape, where)
+        elif self.shape is not None:
             sensors, values = _normalise_shape(self.shape, where)
         else:
             sensors, values = (), None
         object.__setattr__(self, "sensors", sensors)
         object.__setattr__(self, "shape_values", values)
+        object.__setattr__(self, "observation", observation)
 
     @property
     def has_shape(self) -> bool:
@@ -220,4 +254,80 @@ def targets_from_modal_result(
             label=None if labels is None else labels[i],
         )
         for i, f in enumerate(fn)
+    ]
+
+
+def targets_from_shapes(
+    shapes: Any,
+    observation: Any,
+    *,
+    quality: Any = None,
+    min_mpc: float = 0.0,
+    labels: Sequence[str] | None = None,
+) -> list[FrequencyTarget]:
+    """Frequency + shape targets from identified modes on test DOFs.
+
+    Parameters
+    ----------
+    shapes : xarray.DataArray ("mode", "dof")
+        Identified shapes with an ``fn_hz`` coordinate (complex shapes are rotated to
+        their most real phase and their real part is used).
+    observation : mvtk.correlation.DofMapping or matrix
+        Sensor mapping onto the model being updated (its ``dof`` labels select and order
+        the test DOFs); or a matrix (n_dof_test, n_fe_dof) in the order of ``shapes``.
+    quality : pandas.DataFrame, optional
+        Per-mode identification quality (the ``mvtk.modal`` table), indexed by mode or
+        with a ``mode`` column; ``mpc`` (0..1) and ``reliable`` (bool) are used: the
+        weight of a target is its ``mpc`` (1 when absent), 0 when not ``reliable`` or
+        when ``mpc < min_mpc``.
+    min_mpc : float
+    labels : sequence of str, optional
+
+    Returns
+    -------
+    list of FrequencyTarget
+    """
+    import xarray as xr
+
+    if not isinstance(shapes, xr.DataArray) or set(shapes.dims) != {"mode", "dof"}:
+        raise DimensionError(
+            f"shapes must be a DataArray with dims ('mode', 'dof'), got "
+            f"{getattr(shapes, 'dims', type(shapes).__name__)}"
+        )
+    shapes = shapes.transpose("mode", "dof")
+    if "fn_hz" not in shapes.coords:
+        raise ParameterError("shapes need an 'fn_hz' coordinate on 'mode'")
+    dofs = getattr(observation, "dof", None)
+    C = getattr(observation, "matrix", observation)
+    if dofs is not None:
+        have = {str(v) for v in shapes["dof"].values}
+        missing = [d for d in dofs if d not in have]
+        if missing:
+            raise DimensionError(f"mapped DOFs {missing[:6]} are not in the identified shapes")
+        shapes = shapes.sel(dof=list(dofs))
+    vals = shapes.values
+    if np.iscomplexobj(vals):
+        vals = np.array([np.real(v * np.exp(-0.5j * np.angle(np.sum(v * v)))) for v in vals])
+    modes = shapes["mode"].values
+    w = np.ones(len(modes))
+    if quality is not None:
+        q = quality.set_index("mode") if "mode" in getattr(quality, "columns", ()) else quality
+        for k, m in enumerate(modes):
+            if m not in q.index:
+                raise ParameterError(f"quality table has no row for mode {m}")
+            row = q.loc[m]
+            if "mpc" in q.columns:
+                w[k] = float(row["mpc"]) if float(row["mpc"]) >= min_mpc else 0.0
+            if "reliable" in q.columns and not bool(row["reliable"]):
+                w[k] = 0.0
+    if labels is not None and len(labels) != len(modes):
+        raise DimensionError(f"expected {len(modes)} labels, got {len(labels)}")
+    dof_labels = [str(d) for d in shapes["dof"].values]
+    return [
+        FrequencyTarget(
+            float(shapes["fn_hz"].values[k]), weight=float(w[k]),
+            label=labels[k] if labels is not None else f"mode {modes[k]}",
+            shape={"values": vals[k], "observation": C, "labels": dof_labels},
+        )
+        for k in range(len(modes))
     ]

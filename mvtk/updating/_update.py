@@ -21,7 +21,7 @@ from ..errors import (
 )
 from ..fe._model import FEModel
 from ..fe._solvers import eigsh_lowest
-from ._pairing import Pairing, classify_modes, pair_modes, target_mac
+from ._pairing import Pairing, classify_modes, pair_modes, target_mac, target_rows
 from ._parameters import Parameter, get_path, with_values
 from ._sensitivity import (
     check_difference,
@@ -96,7 +96,8 @@ class _Problem:
     """Residuals and Jacobian in scaled variables x = p / scale (or log(p / scale))."""
 
     def __init__(self, description, params, targets, builder, n_modes, weights, mac_weight,
-                 regularization, mode_classifier, rel_step, difference, affine=False):
+                 regularization, mode_classifier, rel_step, difference, affine=False,
+                 eigvec_weight=0.0, shape_derivative="nelson"):
         self.description = description
         self.params = params
         self.targets = targets
@@ -121,6 +122,12 @@ class _Problem:
         self.mac_rows = (
             [i for i, t in enumerate(targets) if t.has_shape] if mac_weight > 0 else []
         )
+        self.eigvec_weight = eigvec_weight
+        self.shape_derivative = shape_derivative
+        self.eig_rows = (
+            [i for i, t in enumerate(targets) if t.has_shape] if eigvec_weight > 0 else []
+        )
+        self.n_eig = int(sum(targets[i].shape_values.size for i in self.eig_rows))
         self.need_kinds = mode_classifier is not None or any(
             t.kind is not None for t in targets
         )
@@ -258,6 +265,10 @@ class _Problem:
         r = [self.w * (fp - self.ft) / self.ft]
         if self.mac_rows:
             r.append(self.mac_weight * self.w[self.mac_rows] * (1.0 - pairing.mac[self.mac_rows]))
+        for i in self.eig_rows:
+            y = target_rows(model, eig.vectors[:, [pairing.modes[i]]], self.targets[i], i)[:, 0]
+            r.append(self.eigvec_weight * self.w[i] * _unit_difference(
+                y, self.targets[i].shape_values))
         if self.reg > 0:
             r.append(math.sqrt(self.reg) * (x - self.x0))
         res = np.concatenate(r)
@@ -297,6 +308,21 @@ class _Problem:
                 m = int(st.pairing.modes[i])
             dmac[r, k] = (pm[i, m] - st.pairing.mac[i]) / h
 
+    def _vector_derivative(self, st, phi, pert, pert_eig, k, h, out, n_free) -> None:
+        """Forward difference of the paired mode shapes (mode followed by M-overlap)."""
+        if not same_dofs(st.model, pert):
+            raise ParameterError(
+                "mode-shape residuals need a fixed mesh: perturbing a parameter changed the "
+                "model's free DOFs"
+            )
+        for i in sorted(set(self.mac_rows) | set(self.eig_rows)):
+            m = int(st.pairing.modes[i])
+            ov = st.vectors[:, m] @ (pert.M @ pert_eig.vectors)
+            mp = int(np.argmax(np.abs(ov)))
+            v = pert_eig.vectors[:, mp] * np.sign(ov[mp])
+            out.setdefault(i, np.zeros((st.model.n_dof, n_free)))[:, k] = (
+                v - st.vectors[:, m]) / h
+
     def residual(self, x):
         st = self.state(x)
         if self.freq_tol > 0:
@@ -320,6 +346,12 @@ class _Problem:
         fp = st.fn_all[modes]
         dw2 = np.zeros((nt, free_idx.size))
         dmac = np.zeros((len(self.mac_rows), free_idx.size))
+        shape_idx = sorted(set(self.mac_rows) | set(self.eig_rows))
+        nelson = bool(shape_idx) and self.shape_derivative == "nelson"
+        fd_mac = bool(self.mac_rows) and not nelson
+        need_vec = bool(self.eig_rows) and not nelson
+        mats: list = [None] * free_idx.size
+        dphi_fd: dict[int, np.ndarray] = {}
         base_vals = self.values(x)
         base_desc = self.describe(x)
         for k, j in enumerate(free_idx):
@@ -330,7 +362,15 @@ class _Problem:
             pert_eig = None
             if self.affine:
                 dw2[:, k] = d_omega2(w2, phi, self._aff[2][k], self._aff[3][k])
-                if self.mac_rows:
+                mats[k] = (self._aff[2][k], self._aff[3][k])
+                if need_vec:
+                    xp = np.array(x, dtype=float)
+                    xp[k] += h / self.dp_dx(x)[k]
+                    pert = self.model_at(xp)
+                    hp = self.values(xp)[j] - base_vals[j]
+                    self._vector_derivative(st, phi, pert, self.eigen(pert), k, hp, dphi_fd,
+                                            free_idx.size)
+                if fd_mac:
                     xp = np.array(x, dtype=float)
                     xp[k] += h / self.dp_dx(x)[k]
                     pert = self.model_at(xp)
@@ -346,6 +386,7 @@ class _Problem:
             if all(same):
                 dK, dM = matrix_derivative(st.model, built, h)
                 dw2[:, k] = d_omega2(w2, phi, dK, dM)
+                mats[k] = (dK, dM)
             elif any(same):
                 # a mesh that conforms to the moved field (e.g. a patch edge) changed on
                 # one side only: one-sided difference on the side that kept the mesh
@@ -354,6 +395,7 @@ class _Problem:
                 pert, hs = built[i_same], steps[i_same]
                 dK, dM = matrix_derivative(st.model, [pert], hs)
                 dw2[:, k] = d_omega2(w2, phi, dK, dM)
+                mats[k] = (dK, dM)
                 h = hs
             else:
                 # the mesh changed: finite differences of the eigenvalues, modes tracked
@@ -361,15 +403,45 @@ class _Problem:
                 self.fd_params.add(p.path)
                 pert_eig = self.eigen(pert)
                 dw2[:, k] = (pert_eig.omega2[modes] - w2) / h
-            if self.mac_rows:
+            if fd_mac or need_vec or (nelson and mats[k] is None):
                 if pert_eig is None:
                     pert_eig = self.eigen(pert)
-                self._mac_derivative(st, phi, pert, pert_eig, k, h, dmac)
+                if fd_mac:
+                    self._mac_derivative(st, phi, pert, pert_eig, k, h, dmac)
+                if need_vec or (nelson and mats[k] is None):
+                    self._vector_derivative(st, phi, pert, pert_eig, k, h, dphi_fd,
+                                            free_idx.size)
         dfp = dw2 / (8 * math.pi**2 * fp[:, None])
         scale = self.dp_dx(x)[None, :]
+        deig = np.zeros((self.n_eig, free_idx.size))
+        if shape_idx:
+            dphi = dict(dphi_fd)
+            if nelson:
+                for i in shape_idx:
+                    m = int(modes[i])
+                    d = _nelson(st.model.K, st.model.M, float(st.omega2[m]), st.vectors[:, m],
+                                [mk for mk in mats if mk is not None])
+                    full = dphi.get(i, np.zeros((st.model.n_dof, free_idx.size)))
+                    cols = [c for c in range(free_idx.size) if mats[c] is not None]
+                    full[:, cols] = d
+                    dphi[i] = full
+            row = 0
+            for i in shape_idx:
+                t = self.targets[i]
+                y = target_rows(st.model, st.vectors[:, [modes[i]]], t, i)[:, 0]
+                dy = target_rows(st.model, dphi[i], t, i)
+                if nelson and i in self.mac_rows:
+                    dmac[self.mac_rows.index(i)] = _mac_gradient(t.shape_values, y, dy)
+                if i in self.eig_rows:
+                    n_s = y.size
+                    deig[row:row + n_s] = (self.eigvec_weight * self.w[i]
+                                           * _unit_difference_gradient(y, t.shape_values, dy))
+                    row += n_s
         rows = [(self.w / self.ft)[:, None] * dfp * scale]
         if self.mac_rows:
             rows.append(-self.mac_weight * self.w[self.mac_rows][:, None] * dmac * scale)
+        if self.eig_rows:
+            rows.append(deig * scale)
         if self.reg > 0:
             rows.append(math.sqrt(self.reg) * np.eye(free_idx.size))
         st.jac = np.vstack(rows)
@@ -380,6 +452,79 @@ class _Problem:
             self.timing["eigen_s"] - e0
         )
         return st.jac
+
+
+def _rank_report(J: np.ndarray, tol: float, names: Sequence[str]) -> dict:
+    """Singular values, identifiability and null directions of a (scaled) Jacobian."""
+    n = J.shape[1]
+    _, s, vt = np.linalg.svd(J)
+    sv = np.zeros(n)
+    sv[: s.size] = s
+    smax = float(sv.max()) if n else 0.0
+    weak = np.flatnonzero(sv < tol * smax) if smax > 0 else np.arange(n)
+    return {
+        "singular_values": sv,
+        "identifiable": not weak.size,
+        "null_directions": [{p: round(float(c), 4) for p, c in zip(names, vt[k])}
+                            for k in weak],
+    }
+
+
+def _unit_difference(y: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``s y/|y| - t/|t|`` with ``s = sign(t'y)``: scale- and sign-free shape difference."""
+    s = 1.0 if float(t @ y) >= 0 else -1.0
+    return s * y / np.linalg.norm(y) - t / np.linalg.norm(t)
+
+
+def _unit_difference_gradient(y: np.ndarray, t: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    """Derivative of :func:`_unit_difference` for ``dy`` (n_sensors, n_params)."""
+    s = 1.0 if float(t @ y) >= 0 else -1.0
+    ny = np.linalg.norm(y)
+    u = y / ny
+    return s * (dy - np.outer(u, u @ dy)) / ny
+
+
+def _mac_gradient(t: np.ndarray, y: np.ndarray, dy: np.ndarray) -> np.ndarray:
+    """d MAC(t, y) for ``dy`` (n_sensors, n_params)."""
+    ty, tt, yy = float(t @ y), float(t @ t), float(y @ y)
+    return 2 * ty * (t @ dy) / (tt * yy) - 2 * ty**2 * (y @ dy) / (tt * yy**2)
+
+
+def _nelson(K, M, lam: float, phi: np.ndarray, mats) -> np.ndarray:
+    """Derivatives of a mass-normalised eigenvector by Nelson's method.
+
+    For each ``(dK, dM)``: ``(K - lam M) v = -(dK - lam dM - dlam M) phi`` solved with
+    the component of largest ``|phi|`` held at zero, then
+    ``dphi = v + c phi`` with ``c = -phi' M v - phi' dM phi / 2`` (keeps
+    ``phi' M phi = 1``). Nelson, AIAA J 14(9), 1976. Exact for a distinct eigenvalue.
+
+    Returns
+    -------
+    ndarray (n_dof, len(mats))
+    """
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import splu
+
+    n = phi.size
+    if not mats:
+        return np.zeros((n, 0))
+    kmax = int(np.argmax(np.abs(phi)))
+    keep = np.setdiff1d(np.arange(n), [kmax])
+    A = (sp.csr_matrix(K) - lam * sp.csr_matrix(M))[keep][:, keep].tocsc()
+    lu = splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+              options={"SymmetricMode": True})
+    Mphi = M @ phi
+    F = np.empty((n, len(mats)))
+    dMphi = np.empty(len(mats))
+    for c, (dK, dM) in enumerate(mats):
+        dKp, dMp = dK @ phi, dM @ phi
+        dlam = float(phi @ dKp - lam * (phi @ dMp))
+        F[:, c] = -(dKp - lam * dMp - dlam * Mphi)
+        dMphi[c] = float(phi @ dMp)
+    V = np.zeros((n, len(mats)))
+    V[keep] = lu.solve(F[keep])
+    cst = -(Mphi @ V) - 0.5 * dMphi
+    return V + phi[:, None] * cst[None, :]
 
 
 @dataclass(frozen=True, eq=False)
@@ -422,6 +567,7 @@ class UpdateResult:
         Singular values of the weighted frequency Jacobian in scaled variables.
     condition_number : float
     identifiable : bool
+        From the frequency rows alone.
     null_directions : tuple of dict
         For each non-identifiable direction, the parameter weights of the (scaled)
         right singular vector.
@@ -435,6 +581,19 @@ class UpdateResult:
     timing : dict
         Seconds spent in builds, eigen solves and sensitivity products.
     meta : dict
+    identifiable_with_shapes : bool or None
+        From all data rows (frequencies and mode-shape terms); None without shape
+        terms. ``identifiable=False`` with ``identifiable_with_shapes=True`` says the
+        frequencies alone cannot locate the change but the shapes can.
+    data_singular_values : ndarray or None
+        Singular values of the weighted data Jacobian (frequency + shape rows).
+    initial_identifiable, initial_identifiable_with_shapes : bool or None
+        The same diagnostics at the initial parameter values. On a symmetric structure
+        mirror-image parameters have equal frequency sensitivities there: the
+        frequencies fit two (mirror) solutions equally well and the end point can be the
+        wrong one although its local Jacobian looks regular.
+    initial_null_directions : tuple of dict
+        Null directions of the frequency Jacobian at the initial values.
     """
 
     description: dict
@@ -470,6 +629,11 @@ class UpdateResult:
     cost: float
     timing: dict
     meta: dict = field(default_factory=dict)
+    identifiable_with_shapes: bool | None = None
+    data_singular_values: np.ndarray | None = None
+    initial_identifiable: bool | None = None
+    initial_identifiable_with_shapes: bool | None = None
+    initial_null_directions: tuple[dict, ...] = ()
 
     # ----------------------------------------------------------------- tables
     def _target_labels(self) -> list[str]:
@@ -613,6 +777,9 @@ class UpdateResult:
             "n_jacobians": int(self.n_jacobians),
             "cost": clean(float(self.cost)),
             "identifiable": bool(self.identifiable),
+            "identifiable_with_shapes": self.identifiable_with_shapes,
+            "initial_identifiable": self.initial_identifiable,
+            "initial_identifiable_with_shapes": self.initial_identifiable_with_shapes,
             "condition_number": clean(float(self.condition_number)),
             "singular_values": [clean(float(s)) for s in self.singular_values],
             "null_directions": list(self.null_directions),
@@ -686,6 +853,8 @@ def update(
     weights: Sequence[float] | None = None,
     regularization: float = 0.0,
     mac_weight: float = 0.0,
+    eigvec_weight: float = 0.0,
+    shape_derivative: str = "nelson",
     max_iter: int = 50,
     mode_classifier: Callable[[FEModel, np.ndarray], Sequence[str]] | None = None,
     frequency_std: float | None = None,
@@ -706,6 +875,9 @@ def update(
       frequency errors, f_i the paired model mode),
     - ``mac_weight * w_i * (1 - MAC_i)`` for targets with a measured shape (if
       ``mac_weight > 0``),
+    - ``eigvec_weight * w_i * (s y/|y| - t/|t|)`` per sensor of each target with a
+      measured shape (if ``eigvec_weight > 0``; ``y`` model, ``t`` test shape at the
+      sensors, ``s = sign(t'y)``),
     - ``sqrt(regularization) * (x - x0)`` (Tikhonov towards the initial values),
 
     in scaled variables ``x = p / scale``. Modes are re-paired at every evaluation (MAC +
@@ -739,6 +911,14 @@ def update(
         Tikhonov weight on ``x - x0`` (dimensionless, scaled variables).
     mac_weight : float
         Weight of the ``1 - MAC`` residuals (0: MAC only for pairing).
+    eigvec_weight : float
+        Weight of the eigenvector-difference residuals ``s y/|y| - t/|t|`` per sensor
+        (``y`` the model shape at the target's sensors, ``t`` the measured shape,
+        ``s = sign(t'y)``): they carry where the shapes differ, not only how much.
+    shape_derivative : {"nelson", "fd"}
+        Derivatives of the shape terms: ``"nelson"`` (analytic, Nelson's method from the
+        same dK/dp, dM/dp as the eigenvalue derivatives: no extra eigen solve) or
+        ``"fd"`` (one extra eigen solve per parameter, mode followed by M-overlap).
     max_iter : int
         Maximum number of residual evaluations (``max_nfev`` of least_squares).
     mode_classifier : callable, optional
@@ -822,17 +1002,35 @@ def update(
         raise ParameterError(f"rel_step must be in (0, 1), got {rel_step!r}")
     if builder is None:
         builder = _default_builder()
+    if not (isinstance(eigvec_weight, int | float) and math.isfinite(eigvec_weight)
+            and eigvec_weight >= 0):
+        raise ParameterError(f"eigvec_weight must be a finite number >= 0, got {eigvec_weight!r}")
+    if shape_derivative not in ("nelson", "fd"):
+        raise ParameterError(
+            f"shape_derivative must be 'nelson' or 'fd', got {shape_derivative!r}")
+    if eigvec_weight > 0 and not any(t.has_shape for t in tg):
+        raise ParameterError("eigvec_weight > 0 needs targets with measured shapes")
     prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),
                     float(regularization), mode_classifier, rel_step, difference,
-                    affine=bool(affine))
+                    affine=bool(affine), eigvec_weight=float(eigvec_weight),
+                    shape_derivative=shape_derivative)
     free = prob.free
     lb = prob.to_x(np.array([p.lower for p in params])[free])
     ub = prob.to_x(np.array([p.upper for p in params])[free])
     st0 = prob.state(prob.x0)
     fn0, modes0, mac0 = st0.fn_all[st0.pairing.modes], st0.pairing.modes + 1, st0.pairing.mac
+    # identifiability at the start: a symmetric structure has equal sensitivity columns
+    # for mirror-image parameters there, and the frequencies then cannot tell which of
+    # several (mirror) solutions is the right one, even if the end point looks regular
+    n_shape0 = len(prob.mac_rows) + prob.n_eig
+    J0 = prob.jacobian(prob.x0)
+    free_names = [p.path for p in params if not p.fixed]
+    init_f = _rank_report(J0[: len(tg)], identifiability_tol, free_names)
+    init_d = (_rank_report(J0[: len(tg) + n_shape0], identifiability_tol, free_names)
+              if n_shape0 else None)
     if not (isinstance(freq_tol, int | float) and freq_tol >= 0):
         raise ParameterError(f"freq_tol must be a number >= 0, got {freq_tol!r}")
-    if mac_weight == 0 and regularization == 0:
+    if mac_weight == 0 and regularization == 0 and eigvec_weight == 0:
         prob.freq_tol = float(freq_tol)
     try:
         sol = least_squares(
@@ -848,7 +1046,8 @@ def update(
     st = prob.state(x)
     J = prob.jacobian(x)
     n_t, n_free = len(tg), int(free.sum())
-    n_data = n_t + len(prob.mac_rows)
+    n_shape = len(prob.mac_rows) + prob.n_eig
+    n_data = n_t + n_shape
     Jd = J[:n_data]
     Jf = J[:n_t]
     # identifiability from the frequency rows (regularisation would mask it)
@@ -860,6 +1059,13 @@ def update(
     weak = np.flatnonzero(ratio < identifiability_tol)
     cond = float(smax / s_full.min()) if s_full.min() > 0 else math.inf
     free_params = [p for p in params if not p.fixed]
+    shape_ok, s_data = None, None
+    if n_shape:
+        sd = np.linalg.svd(Jd, compute_uv=False)
+        s_data = np.zeros(n_free)
+        s_data[: sd.size] = sd
+        rd = s_data / s_data.max() if s_data.max() > 0 else np.zeros_like(s_data)
+        shape_ok = bool(np.all(rd >= identifiability_tol))
     null_dirs = []
     if weak.size:
         for k in weak:
@@ -873,17 +1079,33 @@ def update(
             f"{n_t} target frequencies for {n_free} free parameters"
             if n_t < n_free else f"condition number {cond:.3g}"
         )
+        if shape_ok is not True:
+            shapes_too = " (nor the mode-shape terms)" if n_shape else ""
+            warnings.warn(
+                f"parameters cannot be separated by the targets ({why}); the frequencies"
+                f"{shapes_too} do not change along the direction(s) (in p/scale) {pretty}. "
+                "Fix one of them, add targets (other modes, mode shapes) or use "
+                "regularization",
+                IdentifiabilityWarning, stacklevel=2,
+            )
+    if (not weak.size and not init_f["identifiable"]
+            and (init_d is None or not init_d["identifiable"])):
+        pretty0 = "; ".join(
+            " + ".join(f"{c:+.2f}*{pth}" for pth, c in d.items() if abs(c) > 1e-3)
+            for d in init_f["null_directions"]
+        )
         warnings.warn(
-            f"parameters cannot be separated by the targets ({why}); the frequencies do "
-            f"not change along the direction(s) (in p/scale) {pretty}. Fix one of them, add "
-            "targets (other modes, mode shapes) or use regularization",
+            "at the initial values the targets cannot separate the parameters along "
+            f"{pretty0}: several parameter sets (e.g. mirror images on a symmetric "
+            "structure) may fit them equally well and the result may be the wrong one; "
+            "add mode-shape targets (eigvec_weight) or fix parameters",
             IdentifiabilityWarning, stacklevel=2,
         )
     # covariance (scaled variables) -> physical units
     std_note = None
     A = J.T @ J
     if frequency_std is not None:
-        sig = np.concatenate([(w * frequency_std) ** 2, np.zeros(len(prob.mac_rows))])
+        sig = np.concatenate([(w * frequency_std) ** 2, np.zeros(n_shape)])
     elif n_data > n_free:
         r = st.residual[:n_data]
         sig = np.full(n_data, float(r @ r) / (n_data - n_free))
@@ -898,7 +1120,7 @@ def update(
     sc = prob.dp_dx(x)
     cov = cov_x * np.outer(sc, sc)
     std_free = np.sqrt(np.abs(np.diag(cov)))
-    if weak.size and regularization == 0:
+    if weak.size and regularization == 0 and shape_ok is not True:
         involved = np.zeros(n_free, dtype=bool)
         for d in null_dirs:
             involved |= np.abs(np.array(list(d.values()))) > 1e-3
@@ -976,5 +1198,13 @@ def update(
         meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
               "one_sided_parameters": sorted(prob.one_sided),
               "least_squares_status": status, "affine_check_rel": affine_dev,
-              "std_note": std_note},
+              "std_note": std_note,
+              "initial_frequency_singular_values": init_f["singular_values"],
+              "initial_data_singular_values": (None if init_d is None
+                                               else init_d["singular_values"])},
+        identifiable_with_shapes=shape_ok,
+        initial_identifiable=init_f["identifiable"],
+        initial_identifiable_with_shapes=None if init_d is None else init_d["identifiable"],
+        initial_null_directions=tuple(init_f["null_directions"]),
+        data_singular_values=s_data,
     )

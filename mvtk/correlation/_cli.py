@@ -1,0 +1,71 @@
+"""``mvtk correlate GEOMETRY STRUCTURE.toml [--shapes FILE.nc] [--json]``.
+
+Maps the sensors of a test geometry onto the FE model of a structure description and
+prints the mapping, the MAC and pairing table and the COMAC per sensor (with test shapes
+in a netCDF file holding a ``("mode", "dof")`` DataArray), or the FE AutoMAC at the
+sensors (pretest check) without them. The study-level ``mvtk correlate STUDY.toml`` is
+wired by the study package on top of :func:`mvtk.correlation.correlate`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+__all__ = ["add_parser"]
+
+
+def add_parser(subparsers) -> None:
+    """Register the ``correlate`` sub-command."""
+    p = subparsers.add_parser(
+        "correlate",
+        help="map a test geometry onto an FE model; MAC, pairing and COMAC",
+        description="Map the sensors of a test geometry (UFF, TOML or CSV) onto the FE "
+        "model of a structure TOML and correlate test shapes with the FE modes.",
+    )
+    p.add_argument("geometry", help="test geometry (.uff/.unv, .toml or .csv)")
+    p.add_argument("structure", help="structure description (TOML), see mvtk.fe.build_model")
+    p.add_argument("--shapes", help="netCDF file with test shapes (dims mode, dof)")
+    p.add_argument("-n", "--n-modes", type=int, default=10, help="FE modes (default 10)")
+    p.add_argument("--method", choices=("shape", "nearest"), default="shape")
+    p.add_argument("--tol", type=float, default=None, help="off-model tolerance (m)")
+    p.add_argument("--units-scale", type=float, default=1.0,
+                   help="factor applied to geometry coordinates (1e-3 for mm)")
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run ``mvtk correlate``; errors propagate as MvtkError."""
+    from ..errors import FormatError
+    from ..fe import build_model, modal_analysis
+    from ._correlate import correlate
+    from ._geometry import read_test_geometry
+
+    geo = read_test_geometry(args.geometry, units_scale=args.units_scale)
+    model = build_model(args.structure)
+    modal = modal_analysis(model, args.n_modes)
+    test = None
+    if args.shapes:
+        import xarray as xr
+
+        try:
+            test = xr.open_dataarray(args.shapes).load()
+        except (OSError, ValueError) as err:
+            raise FormatError(f"{args.shapes}: cannot read a shapes DataArray ({err})") from err
+    res = correlate(geo, model, modal, test, method=args.method, tol=args.tol)
+    if args.json:
+        sys.stdout.write(json.dumps(res.to_dict()) + "\n")
+        return 0
+    out = [f"{len(res.mapping.dof)} sensors mapped ({res.mapping.method}) onto "
+           f"{model.n_dof} FE DOFs", "", res.dof_table().to_string(index=False), ""]
+    if res.pairing is not None:
+        out += [res.pairing_table().to_string(index=False), ""]
+    else:
+        am = res.mac.values.copy()
+        for i in range(am.shape[0]):
+            am[i, i] = 0.0
+        out += [f"FE AutoMAC at the sensors: largest off-diagonal {am.max():.3f}"]
+    sys.stdout.write("\n".join(out) + "\n")
+    return 0

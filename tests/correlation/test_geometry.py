@@ -1,0 +1,133 @@
+"""Test geometry readers (UFF 15/2411/18/82/2412, TOML, CSV) and sensor directions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mvtk.correlation import (
+    CoordinateSystem,
+    Sensor,
+    TestGeometry,
+    direction_label,
+    read_test_geometry,
+)
+from mvtk.errors import ConfigError, FormatError, ParameterError, UnsupportedFormatError
+
+pyuff = pytest.importorskip("pyuff")
+
+
+def _write_uff(path):
+    u = pyuff.UFF(str(path))
+    # cs 1: origin (1, 0, 0), local x along global y, local z along global z
+    u.write_sets(pyuff.prepare_18(
+        cs_num=[1, 2], cs_type=[0, 0], ref_cs_num=[0, 1], cs_name=["rot", "chained"],
+        ref_o=np.array([[1.0, 0, 0], [0.0, 0, 0]]),
+        x_point=np.array([[1.0, 1, 0], [1.0, 0, 0]]),
+        xz_point=np.array([[1.0, 1, 1], [1.0, 0, 1]])), "add")
+    u.write_sets(pyuff.prepare_15(
+        node_nums=[1, 2, 3], def_cs=[0, 0, 1], disp_cs=[0, 1, 2], color=[1, 1, 1],
+        x=[0.0, 1.0, 2.0], y=[0.0, 0.0, 0.0], z=[0.0, 0.0, 0.5]), "add")
+    u.write_sets(pyuff.prepare_2411(
+        node_nums=[4, 5], def_cs=[0, 0], disp_cs=[0, 0], color=[1, 1],
+        x=[0.0, 1.0], y=[1.0, 1.0], z=[0.0, 0.0]), "add")
+    u.write_sets(pyuff.prepare_82(trace_num=1, n_nodes=3, color=1, id="edge",
+                                  nodes=np.array([1, 2, 3])), "add")
+    with open(path, "a") as fh:  # a 2412 quad (fe_descriptor 94), written by hand
+        fh.write("    -1\n  2412\n         1        94         1         1         1         4\n"
+                 "         1         2         5         4\n    -1\n")
+
+
+def test_uff_geometry_resolves_local_systems(tmp_path):
+    p = tmp_path / "geo.uff"
+    _write_uff(p)
+    g = read_test_geometry(p)
+    assert g.node.tolist() == [1, 2, 3, 4, 5]
+    # node 3 is defined in cs 1: local (2, 0, 0.5) -> global (1, 2, 0.5)
+    np.testing.assert_allclose(g.xyz[2], [1.0, 2.0, 0.5], atol=1e-12)
+    R1 = g.coordinate_systems[1].rotation
+    np.testing.assert_allclose(R1[:, 0], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(R1[:, 2], [0, 0, 1], atol=1e-12)
+    # cs 2 is defined in cs 1 with identity axes: same rotation as cs 1
+    np.testing.assert_allclose(g.coordinate_systems[2].rotation, R1, atol=1e-12)
+    g = g.with_sensors([(2, "+x"), (2, "-z"), (1, 3)])
+    v = g.sensor_vectors()
+    np.testing.assert_allclose(v[0], [0, 1, 0], atol=1e-12)  # local +x = global +y
+    np.testing.assert_allclose(v[1], [0, 0, -1], atol=1e-12)
+    np.testing.assert_allclose(v[2], [0, 0, 1], atol=1e-12)  # UFF code 3 = +z
+    assert g.dof_labels == ["2+x", "2-z", "1+z"]
+    assert len(g.lines) == 2 and g.lines[1].tolist() == [1, 2, 5, 4, 1]
+    assert g.edges().shape == (6, 2)
+
+
+def test_toml_round_trip_with_skewed_and_triaxial(tmp_path):
+    R = CoordinateSystem(7, np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]]), [0, 0, 0], "r90")
+    g = TestGeometry([10, 20], [[0, 0, 0], [0.1, 0, 0]], [0, 7], {7: R}, ([10, 20],),
+                     (Sensor(10, "+z"), Sensor(20, "+x"),
+                      Sensor(20, "s1", (0.0, 0.6, 0.8))))
+    text = g.to_toml(tmp_path / "g.toml")
+    assert "[[sensors]]" in text
+    h = read_test_geometry(tmp_path / "g.toml")
+    np.testing.assert_allclose(h.sensor_vectors(), g.sensor_vectors(), atol=1e-12)
+    # +x of node 20 in the system rotated 90 deg about z reads global +y
+    np.testing.assert_allclose(h.sensor_vectors()[1], [0, 1, 0], atol=1e-12)
+    np.testing.assert_allclose(h.sensor_vectors()[2], [-0.6, 0, 0.8], atol=1e-12)
+    tri = read_test_geometry({"nodes": [{"node": 1, "x": 0, "y": 0, "z": 0}],
+                              "sensors": [{"node": 1, "triaxial": True}]})
+    assert tri.dof_labels == ["1+x", "1+y", "1+z"]
+
+
+def test_csv_table(tmp_path):
+    p = tmp_path / "g.csv"
+    p.write_text("node,x,y,z,directions\n1,0,0,0,+z\n2,10,0,0,+x +y +z\n")
+    g = read_test_geometry(p, units_scale=1e-3)
+    np.testing.assert_allclose(g.xyz[1], [0.01, 0, 0])
+    assert g.dof_labels == ["1+z", "2+x", "2+y", "2+z"]
+    assert g.nodes_table().shape == (2, 5)
+
+
+def test_direction_labels():
+    assert direction_label(-5) == "-ry"
+    assert direction_label("z") == "+z"
+    with pytest.raises(ParameterError, match="expected 1..6"):
+        direction_label(9)
+
+
+@pytest.mark.parametrize("content, match", [
+    ("node,x,y\n1,0,0\n", "header must have columns node, x, y, z"),
+    ("node,x,y,z\n1,0,abc,0\n", r"line 2: expected an integer node"),
+    ("node,x,y,z,directions\n1,0,0,0,+q\n", r"line 2: unknown direction '\+q'"),
+    ("node,x,y,z\n1,0,0,0\n1,1,0,0\n", r"duplicated node labels \[1\]"),
+    ("node,x,y,z,cs\n1,0,0,0,4\n", r"undefined coordinate systems \[4\]"),
+])
+def test_csv_errors(tmp_path, content, match):
+    p = tmp_path / "bad.csv"
+    p.write_text(content)
+    with pytest.raises(FormatError, match=match) as err:
+        read_test_geometry(p)
+    assert "bad.csv" in str(err.value)
+
+
+def test_bad_inputs(tmp_path):
+    with pytest.raises(UnsupportedFormatError, match="expected .uff, .unv, .toml or .csv"):
+        (tmp_path / "g.xyz").write_text("x")
+        read_test_geometry(tmp_path / "g.xyz")
+    with pytest.raises(FormatError, match="not found"):
+        read_test_geometry(tmp_path / "none.toml")
+    with pytest.raises(ConfigError, match=r"nodes\[0\]: expected keys node, x, y, z"):
+        read_test_geometry({"nodes": [{"node": 1, "x": 0}]})
+    with pytest.raises(ConfigError, match=r"sensors\[0\]: a skewed sensor needs a name"):
+        read_test_geometry({"nodes": [{"node": 1, "x": 0, "y": 0, "z": 0}],
+                            "sensors": [{"node": 1, "direction": "+z", "vector": [0, 0, 1]}]})
+    with pytest.raises(ParameterError, match="not a proper orthonormal"):
+        CoordinateSystem(1, np.diag([1.0, 1.0, 2.0]))
+    with pytest.raises(ParameterError, match="collinear"):
+        CoordinateSystem.from_points(3, [0, 0, 0], [1, 0, 0], [2, 0, 0])
+    with pytest.raises(ParameterError, match="sensor 9\\+z: node 9 is not a test node"):
+        TestGeometry([1], [[0, 0, 0]], sensors=(Sensor(9, "+z"),))
+    p = tmp_path / "nonodes.uff"
+    u = pyuff.UFF(str(p))
+    u.write_sets(pyuff.prepare_82(trace_num=1, n_nodes=2, color=1, id="x",
+                                  nodes=np.array([1, 2])), "add")
+    with pytest.raises(FormatError, match=r"no node dataset \(15 or 2411\)"):
+        read_test_geometry(p)
