@@ -13,6 +13,9 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[all]'
+	# SDynPy is the peer of the correlation tests (MAC, FRAC, MSF); its GUI dependencies
+	# (PyQt5, VTK: hundreds of MB) are not needed for that, so it comes without them
+	$(BIN)/python -m pip install --quiet --no-deps 'sdynpy>=0.23'
 	touch $(STAMP)
 
 report: $(STAMP)
