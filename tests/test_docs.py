@@ -70,3 +70,27 @@ def test_site_checker_refuses_an_unbuilt_site(tmp_path, capsys):
 def test_conf_lists_the_generator_extension():
     text = (ROOT / "docs" / "conf.py").read_text(encoding="utf-8")
     assert '"mvtk_docs"' in text and 'nb_execution_raise_on_error = True' in text
+
+
+def test_study_reference_is_generated_from_the_schema(monkeypatch):
+    """Changing a default in the study schema changes the generated reference page."""
+    import dataclasses
+
+    schema_mod = pytest.importorskip("mvtk.study._schema")
+    page = mvtk_docs.study_schema_page()
+    for section, table in schema_mod.SCHEMA.items():
+        assert f"`{section}`" in page
+        for key in table.keys:
+            assert f"| `{key}` |" in page
+    # a changed default shows up in the page: nothing is hand-copied
+    section, table = next((s, t) for s, t in schema_mod.SCHEMA.items()
+                          if any(not k.required and isinstance(k.default, bool)
+                                 for k in t.keys.values()))
+    name, key = next((n, k) for n, k in table.keys.items()
+                     if not k.required and isinstance(k.default, bool))
+    changed = dict(schema_mod.SCHEMA)
+    changed[section] = dataclasses.replace(
+        table, keys={**table.keys, name: dataclasses.replace(key, default="SENTINEL-42")})
+    monkeypatch.setattr(schema_mod, "SCHEMA", changed)
+    assert '`"SENTINEL-42"`' in mvtk_docs.study_schema_page()
+    assert '`"SENTINEL-42"`' not in page

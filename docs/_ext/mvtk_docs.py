@@ -90,16 +90,75 @@ def cli_page() -> str:
     return "\n".join(out)
 
 
+def _fmt_default(key: dict) -> str:
+    if key.get("required"):
+        return "**required**"
+    value = key.get("default")
+    if value is None:
+        return "—"
+    return f"`{value!r}`" if not isinstance(value, str) else f'`"{value}"`'
+
+
+def _fmt_range(key: dict) -> str:
+    parts = []
+    if "minimum" in key:
+        parts.append((">" if key.get("exclusive_minimum") else ">=") + f" {key['minimum']:g}")
+    if "maximum" in key:
+        parts.append(("<" if key.get("exclusive_maximum") else "<=") + f" {key['maximum']:g}")
+    if "choices" in key:
+        parts.append("one of " + ", ".join(f"`{c}`" for c in key["choices"]))
+    if key.get("ascending"):
+        parts.append("ascending")
+    if "length" in key:
+        parts.append(f"{key['length']} values")
+    return "; ".join(parts)
+
+
+def _table_md(title: str, table: dict, level: int, out: list[str]) -> None:
+    out += [f"{'#' * level} `{title}`", "", table["doc"], ""]
+    for group in table.get("one_of", []):
+        out += ["Exactly one of " + ", ".join(f"`{k}`" for k in group) + ".", ""]
+    for group in table.get("at_most_one_of", []):
+        out += ["At most one of " + ", ".join(f"`{k}`" for k in group) + ".", ""]
+    rows = [(name, key) for name, key in table["keys"].items()]
+    if rows:
+        out += ["| key | type | units | default | allowed | meaning |",
+                "| --- | --- | --- | --- | --- | --- |"]
+        for name, key in rows:
+            doc = " ".join(str(key["doc"]).split()).replace("|", "\\|")
+            out.append(f"| `{name}` | {key['type']} | {key['units'] or '—'} | "
+                       f"{_fmt_default(key)} | {_fmt_range(key) or '—'} | {doc} |")
+        out.append("")
+    for name, key in rows:
+        if "table" in key:
+            sub = f"{title}.{name}" if key["type"] == "table" else f"[{title}.{name}]"
+            _table_md(sub, key["table"], min(level + 1, 6), out)
+
+
 def study_schema_page() -> str | None:
-    """MyST text of the study TOML reference, or None if no schema is exposed."""
+    """MyST text of the study TOML reference, generated from the schema the parser uses.
+
+    Returns None when the study package exposes no declarative schema.
+    """
     try:
-        study = importlib.import_module("mvtk.study")
+        schema_mod = importlib.import_module("mvtk.study._schema")
     except ModuleNotFoundError:
         return None
-    render = getattr(study, "schema_markdown", None)
-    if render is None:
+    schema = getattr(schema_mod, "SCHEMA", None)
+    if schema is None:
         return None
-    return render()
+    out = ["# Study file reference", "",
+           "Generated from the schema of `mvtk.study`, the one `mvtk run`, `update`, `reduce` "
+           "and `control` validate every study file against: a key that is not listed here "
+           "is refused. Paths are relative to the study file; units are SI.", ""]
+    for section, table in schema.items():
+        _table_md(section, table.to_dict(), 2, out)
+    controllers = getattr(schema_mod, "CONTROLLER_SCHEMAS", None)
+    if controllers:
+        out += ["## Controller types (`[[control.controllers]]`)", ""]
+        for name, table in controllers.items():
+            _table_md(f"type = \"{name}\"", table.to_dict(), 3, out)
+    return "\n".join(out) + "\n"
 
 
 def _write(path: Path, text: str) -> None:
