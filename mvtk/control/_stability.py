@@ -225,7 +225,7 @@ class LoopMargins:
     gain_margin_db : float
         ``20 log10(gain_margin)``.
     phase_margin_deg : float
-        Phase margin (deg) at the gain crossover with the smallest |margin| (inf: none).
+        Phase margin (deg) at the gain crossover with the smallest absolute margin (inf: none).
     w_pc, w_gc : float
         Frequencies (rad/s) of the reported phase and gain crossovers (NaN: none).
     critical_gain_factor : float

@@ -308,7 +308,8 @@ def cross_orthogonality(a: Any, b: Any | None, tam: np.ndarray) -> xr.DataArray:
     -------
     xarray.DataArray ("mode_a", "mode_b")
         Near +-1 on paired modes and near 0 elsewhere when test and model agree
-        (common acceptance: |diagonal| > 0.9, |off-diagonal| < 0.1).
+        (common acceptance: diagonal terms above 0.9 and off-diagonal terms below 0.1,
+        in absolute value).
     """
     A, B = _aligned(a, a if b is None else b)
     Mt = np.asarray(tam)

@@ -156,7 +156,8 @@ def plot_mode_shapes(
         Node coordinates in m (x, y used).
     uz : array, shape (n_nodes, n_modes)
         Out-of-plane displacement of each node in each mode (e.g. ``FEModel.expand``
-        of the mode vectors, component ``uz``). Each mode is scaled to a largest absolute ``uz`` of 1.
+        of the mode vectors, component ``uz``). Each mode is scaled to a largest
+        absolute ``uz`` of 1.
     fn_hz : sequence of float, length n_modes
         Eigenfrequencies in Hz (titles).
     """
