@@ -2,6 +2,16 @@
 
 from ._assembly import assemble_element_matrices, assemble_shell_model
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
+from ._general import (
+    GENERAL_SUPPORTS,
+    BeamSet,
+    PointMass,
+    RigidLink,
+    ShellSet,
+    Spring,
+    assemble_model,
+    support_dofs,
+)
 from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._mesh import (
@@ -13,7 +23,14 @@ from ._mesh import (
     rectangular_plate_mesh,
     support_components,
 )
-from ._modal import ModalResult, modal_analysis, mode_type, static_solve
+from ._modal import (
+    ENERGY_PARTS,
+    ModalResult,
+    energy_split,
+    modal_analysis,
+    mode_type,
+    static_solve,
+)
 from ._model import DOF_NAMES, FEModel
 from ._piezo import (
     PiezoPatch,
@@ -23,7 +40,15 @@ from ._piezo import (
     piezo_moment_per_volt,
 )
 from ._plate import SpringSupport, plate_model
+from ._sections import (
+    box_section,
+    generic_section,
+    i_section,
+    rectangle_section,
+    tube_section,
+)
 from ._shell import DRILL_FACTOR, mitc4_matrices
+from ._shell3d import TRI_SHEAR_ALPHA, mitc3_matrices, shell_element_matrices, shell_frames
 from ._solvers import EigenSolution, eigsh_lowest, factorize
 from ._structure import build_model, get_by_path, load_structure, set_by_path
 
@@ -54,6 +79,25 @@ __all__ = [
     "ModalResult",
     "modal_analysis",
     "mode_type",
+    "energy_split",
+    "ENERGY_PARTS",
+    "GENERAL_SUPPORTS",
+    "ShellSet",
+    "BeamSet",
+    "PointMass",
+    "Spring",
+    "RigidLink",
+    "assemble_model",
+    "support_dofs",
+    "rectangle_section",
+    "tube_section",
+    "i_section",
+    "box_section",
+    "generic_section",
+    "TRI_SHEAR_ALPHA",
+    "mitc3_matrices",
+    "shell_element_matrices",
+    "shell_frames",
     "static_solve",
     "build_model",
     "load_structure",

@@ -529,6 +529,8 @@ def assemble_model(
     counts = {"mitc4": 0, "mitc3": 0, "beam2": 0}
     element_sets: dict[str, tuple[str, np.ndarray]] = {}
     links = []
+    shell_groups: list = []
+    beam_groups: list = []
     normals = np.zeros((n_nodes, 3))
     for i, mbr in enumerate(members):
         if isinstance(mbr, ShellSet):
@@ -582,6 +584,12 @@ def assemble_model(
         dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
         K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
         M = M + assemble_element_matrices(Me, dofs, ident, n_all)
+        if kind == "beam2":
+            beam_groups.append((counts[kind] + np.arange(len(el)), mbr.section,
+                                mbr.orientation, mbr.offset))
+        else:
+            shell_groups.append((kind, counts[kind] + np.arange(len(el)), lam,
+                                 mbr.material_axis))
         name_ = getattr(mbr, "name", kind)
         if name_ in element_sets:
             raise ParameterError(f"element set name {name_!r} used twice")
@@ -622,7 +630,9 @@ def assemble_model(
     elements = {k: np.concatenate(v) for k, v in conn.items() if v}
     out_meta = {"element_sets": element_sets, "unused_dofs": unused,
                 "recovery": T.tocsr() if links else None,
-                "supports": dict(supports or {}), "members": tuple(members)}
+                "supports": dict(supports or {}), "members": tuple(members),
+                "shell_groups": shell_groups, "beam_groups": beam_groups,
+                "drill_factor": drill_factor}
     out_meta.update(meta or {})
     return FEModel(nodes=nodes, M=Mr, K=Kr, dof_node=keep // 6, dof_component=keep % 6,
                    node_sets=node_sets, elements=elements, name=name, meta=out_meta,
