@@ -94,19 +94,22 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import ConfigError, MvtkError
+from ._general import GENERAL_SUPPORTS, support_dofs
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._mesh import Patch
-from ._model import FEModel
+from ._model import DOF_NAMES, FEModel
 from ._plate import SpringSupport, plate_model
 
-__all__ = ["build_model", "load_structure", "set_by_path", "get_by_path"]
+__all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "constrain_model"]
 
 _ORTHO_KEYS = ("E1", "E2", "G12", "G13", "G23", "nu12", "rho")
 
@@ -322,21 +325,26 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         name = p.get("name")
         if not isinstance(name, str) or not name:
             raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
         coords = [_number(p, k, w, positive=False) for k in ("x0", "x1", "y0", "y1")]
         patches.append((Patch(name, *coords), _plies(p.get("layers"), materials, w + "layers")))
 
     mesh = s.get("mesh", {})
     if not isinstance(mesh, Mapping):
         raise ConfigError("mesh: expected a table")
-    unknown = set(mesh) - {"nx", "ny", "element_size"}
-    if unknown:
-        raise ConfigError(f"mesh: unknown keys {sorted(unknown)}; expected nx, ny, element_size")
+    _check_keys(mesh, "mesh", ("nx", "ny", "element_size"),
+                {"n_elements": "for beams; a plate takes nx and ny"})
     for k in ("nx", "ny"):
         if k in mesh and (isinstance(mesh[k], bool) or not isinstance(mesh[k], int)
                           or mesh[k] < 1):
             raise ConfigError(f"mesh.{k}: expected a positive integer, got {mesh[k]!r}")
     if ("nx" in mesh) != ("ny" in mesh) and "element_size" not in mesh:
         raise ConfigError("mesh: give both nx and ny, or element_size")
+    if "element_size" in mesh and ("nx" in mesh or "ny" in mesh):
+        raise ConfigError(
+            "mesh: give either nx and ny or element_size, not both (one of them would be "
+            f"ignored); found keys {sorted(mesh)}"
+        )
     if not mesh:
         raise ConfigError("mesh: missing; give nx and ny, or element_size")
     esize = _number(mesh, "element_size", "mesh.", required=False)
@@ -344,11 +352,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    unknown = set(b) - {"clamp", "clamp_stiffness", "clamp_translational_stiffness", "edges",
-                        "springs"}
-    if unknown:
-        raise ConfigError(f"boundary: unknown keys {sorted(unknown)}; expected clamp, "
-                          "clamp_stiffness, clamp_translational_stiffness, edges, springs")
+    _check_keys(b, "boundary", _PLATE_BOUNDARY_KEYS)
     clamp = b.get("clamp")
     if clamp is not None and clamp not in ("x0", "x1", "y0", "y1"):
         raise ConfigError(f"boundary.clamp: expected one of x0, x1, y0, y1, got {clamp!r}")
@@ -357,33 +361,27 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     edges = b.get("edges", {})
     if not isinstance(edges, Mapping):
         raise ConfigError("boundary.edges: expected a table such as { y0 = 'free' }")
-    springs = []
-    for i, sp_ in enumerate(b.get("springs", [])):
-        w = f"boundary.springs[{i}]."
-        if not isinstance(sp_, Mapping):
-            raise ConfigError(f"boundary.springs[{i}]: expected a table")
-        springs.append(SpringSupport(
-            str(sp_.get("node_set")), str(sp_.get("dof")), _number(sp_, "k", w, positive=False),
-            bool(sp_.get("per_length", False)),
-        ))
-
+    springs = _springs(b, allow_per_length=True)
+    general = _supports(b)
     points = {}
     for i, p in enumerate(s.get("points", [])):
         w = f"points[{i}]."
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"points[{i}]: expected a table with name, x, y")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y"))
         points[p["name"]] = (_number(p, "x", w, positive=False), _number(p, "y", w,
                                                                           positive=False))
     meta = {"structure": s}
     if source is not None:
         meta["source"] = source
     try:
-        return plate_model(
+        model = plate_model(
             length, width, layers, patches=patches, nx=mesh.get("nx"), ny=mesh.get("ny"),
             element_size=esize, supports=dict(edges), clamp=clamp, clamp_stiffness=cs,
             clamp_translational_stiffness=cts, springs=springs, points=points,
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
+        return constrain_model(model, general, ())
     except ConfigError:
         raise
     except MvtkError as err:
@@ -403,6 +401,118 @@ def _base_section(st: Mapping, materials: Mapping) -> tuple[float, float, float,
     return length, width, ks, _plies(st.get("layers"), materials, "structure.layers")
 
 
+_PLATE_BOUNDARY_KEYS = ("clamp", "clamp_stiffness", "clamp_translational_stiffness", "edges",
+                        "springs", "supports")
+_BEAM_BOUNDARY_KEYS = ("clamp", "clamp_stiffness", "clamp_translational_stiffness", "springs",
+                       "supports")
+_SPRING_KEYS = ("node_set", "dof", "k", "per_length")
+
+
+def _check_keys(d: Mapping, where: str, accepted, inapplicable: Mapping[str, str] | None = None
+                ) -> None:
+    """ConfigError naming the first unknown key of ``d`` and the accepted ones."""
+    for key in d:
+        if key in accepted:
+            continue
+        why = (inapplicable or {}).get(key)
+        if why:
+            raise ConfigError(f"{where}.{key}: not applicable here ({why}); accepted keys: "
+                              f"{', '.join(accepted)}")
+        raise ConfigError(f"{where}: unknown key {key!r}; accepted keys: {', '.join(accepted)}")
+
+
+def _springs(b: Mapping, allow_per_length: bool) -> list[SpringSupport]:
+    """``boundary.springs`` entries."""
+    raw = b.get("springs", [])
+    if not isinstance(raw, list):
+        raise ConfigError("boundary.springs: expected a list of tables ([[boundary.springs]])")
+    out = []
+    for i, sp_ in enumerate(raw):
+        w = f"boundary.springs[{i}]"
+        if not isinstance(sp_, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(sp_, w, _SPRING_KEYS if allow_per_length else _SPRING_KEYS[:3],
+                    None if allow_per_length else
+                    {"per_length": "a beam node is a point, not an edge"})
+        for key in ("node_set", "dof"):
+            if not isinstance(sp_.get(key), str):
+                raise ConfigError(f"{w}.{key}: expected a string, got {sp_.get(key)!r}")
+        if sp_["dof"] not in DOF_NAMES:
+            raise ConfigError(f"{w}.dof: {sp_['dof']!r} is not a DOF name; expected one of "
+                              f"{', '.join(DOF_NAMES)}")
+        out.append(SpringSupport(sp_["node_set"], sp_["dof"],
+                                 _number(sp_, "k", w + ".", positive=False),
+                                 bool(sp_.get("per_length", False))))
+    return out
+
+
+def _supports(b: Mapping) -> dict[str, Any]:
+    """``boundary.supports = { node_set = "type" or [DOF names] }``."""
+    sup = b.get("supports", {})
+    if not isinstance(sup, Mapping):
+        raise ConfigError("boundary.supports: expected a table such as "
+                          "{ x0 = 'pinned', x1 = ['uy', 'uz'] }")
+    out = {}
+    for k, v in sup.items():
+        if isinstance(v, str):
+            if v not in GENERAL_SUPPORTS:
+                raise ConfigError(f"boundary.supports.{k}: unknown support type {v!r}; "
+                                  f"expected one of {', '.join(sorted(GENERAL_SUPPORTS))} or "
+                                  "a list of DOF names")
+        elif isinstance(v, list) and all(x in DOF_NAMES for x in v):
+            pass
+        else:
+            raise ConfigError(f"boundary.supports.{k}: expected a support type or a list of "
+                              f"DOF names from {', '.join(DOF_NAMES)}, got {v!r}")
+        out[str(k)] = v
+    return out
+
+
+def constrain_model(model: FEModel, supports: Mapping[str, Any],
+                    springs: Sequence[SpringSupport]) -> FEModel:
+    """Copy of ``model`` with further supports (fixed DOFs) and grounded springs.
+
+    Parameters
+    ----------
+    model : FEModel
+    supports : mapping of node-set name to a support type of
+        :data:`mvtk.fe.GENERAL_SUPPORTS` or a list of DOF names
+    springs : sequence of SpringSupport
+        ``per_length`` is not used here (springs per node).
+    """
+    if not supports and not springs:
+        return model
+    fixed = []
+    for name, kind in supports.items():
+        ns = model.node_set(name)
+        try:
+            fixed.append(support_dofs(model.nodes, ns, kind, f"support {name!r}",
+                                      np.array([0.0, 0.0, 1.0])))
+        except MvtkError as err:
+            raise ConfigError(f"boundary.supports.{name}: {err}") from err
+    key = model.dof_node * 6 + model.dof_component
+    keep = ~np.isin(key, np.concatenate(fixed)) if fixed else np.ones(len(key), bool)
+    sel = np.flatnonzero(keep)
+    K = model.K[sel][:, sel].tocsr()
+    M = model.M[sel][:, sel].tocsr()
+    add = np.zeros(len(sel))
+    lookup = {int(g): i for i, g in enumerate(key[sel])}
+    for set_name, dof, k, _ in springs:
+        for n in model.node_set(set_name):
+            g = int(n) * 6 + DOF_NAMES.index(dof)
+            if g not in lookup:
+                raise ConfigError(f"boundary.springs: DOF {dof} of node {int(n)} (set "
+                                  f"{set_name!r}) is constrained; a spring there does nothing")
+            add[lookup[g]] += k
+    if np.any(add):
+        K = (K + sp.diags(add)).tocsr()
+    meta = dict(model.meta)
+    if meta.get("recovery") is not None:
+        meta["recovery"] = meta["recovery"][:, sel]
+    return replace(model, K=K, M=M, dof_node=model.dof_node[sel],
+                   dof_component=model.dof_component[sel], meta=meta)
+
+
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
     """The ``type = "beam"`` branch of :func:`build_model`."""
     from ._beam import BeamPatch, cantilever_beam
@@ -413,6 +523,7 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"patches[{i}]."
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"patches[{i}]: expected a table with a name")
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
         x0 = _number(p, "x0", w, positive=False)
         x1 = _number(p, "x1", w, positive=False)
         pw = None
@@ -426,33 +537,57 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     mesh = s.get("mesh", {})
     if not isinstance(mesh, Mapping):
         raise ConfigError("mesh: expected a table")
-    n_el = mesh.get("n_elements", mesh.get("nx", 40))
+    _check_keys(mesh, "mesh", ("n_elements", "nx", "element_size"),
+                {"ny": "a beam has no elements across its width", "file": "an imported "
+                 "mesh is a structure of its own: drop structure.type"})
+    given = [k for k in ("n_elements", "nx", "element_size") if k in mesh]
+    if len(given) > 1:
+        raise ConfigError(f"mesh: give one of n_elements, nx or element_size, not {given} "
+                          "(the others would be ignored)")
+    if "element_size" in mesh:
+        size = _number(mesh, "element_size", "mesh.")
+        n_el = max(1, int(np.ceil(length / size - 1e-9)))
+    else:
+        n_el = mesh.get("n_elements", mesh.get("nx", 40))
     if isinstance(n_el, bool) or not isinstance(n_el, int) or n_el < 1:
-        raise ConfigError(f"mesh.n_elements: expected a positive integer, got {n_el!r}")
+        raise ConfigError(f"mesh.{given[0] if given else 'n_elements'}: expected a positive "
+                          f"integer, got {n_el!r}")
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", _BEAM_BOUNDARY_KEYS,
+                {"edges": "a beam has no edges; use boundary.supports = { x0 = 'pinned' }"})
     clamp = b.get("clamp", "x0")
     if clamp not in ("x0", "x1", "free"):
         raise ConfigError(f"boundary.clamp: expected x0, x1 or free for a beam, got {clamp!r}")
     cs = _number(b, "clamp_stiffness", "boundary.", required=False)
     cts = _number(b, "clamp_translational_stiffness", "boundary.", required=False)
+    springs = _springs(b, allow_per_length=False)
+    general = _supports(b)
     points = {}
     for i, p in enumerate(s.get("points", [])):
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"points[{i}]: expected a table with name and x")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y"))
+        if "y" in p:
+            y = _number(p, "y", f"points[{i}].", positive=False)
+            if not 0 <= y <= width:
+                raise ConfigError(f"points[{i}].y: {y} m is outside the beam width 0..{width}")
         points[p["name"]] = _number(p, "x", f"points[{i}].", positive=False)
     meta = {"structure": s}
     if source is not None:
         meta["source"] = source
     try:
-        return cantilever_beam(
+        model = cantilever_beam(
             length, width, layers, n_elements=n_el, patches=patches,
             clamp=None if clamp == "free" else clamp,
             clamp_stiffness=None if cs is None else cs * width,
             clamp_translational_stiffness=None if cts is None else cts * width,
             points=points, shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
+        return constrain_model(model, general, springs)
+    except ConfigError:
+        raise
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
