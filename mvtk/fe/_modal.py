@@ -29,8 +29,12 @@ class ModalResult:
     rigid : ndarray of bool (n,)
         True for rigid-body modes.
     mode_type : tuple of str
-        ``"rigid"``, ``"bending"``, ``"torsion"`` or ``"in-plane"`` (see
+        ``"rigid"``, ``"bending"``, ``"torsion"``, ``"in-plane"`` or ``"axial"`` (see
         :func:`mode_type`).
+    dof_node_id : ndarray of int (n_dof,), optional
+        Node label (:attr:`FEModel.node_ids`) of each row of ``shapes``.
+    dof_component : ndarray of int (n_dof,), optional
+        Component (index into ``DOF_NAMES``) of each row of ``shapes``.
     """
 
     fn_hz: np.ndarray
@@ -38,6 +42,40 @@ class ModalResult:
     shapes: np.ndarray
     rigid: np.ndarray
     mode_type: tuple[str, ...]
+    dof_node_id: np.ndarray | None = None
+    dof_component: np.ndarray | None = None
+
+    def to_xarray(self):
+        """Mode shapes as an ``xarray.DataArray`` with dims ``("mode", "dof")``.
+
+        Follows docs/conventions.md: ``mode`` 1-based with coordinates ``fn_hz``,
+        ``zeta`` (NaN: undamped FE modes) and ``mode_type``; ``dof`` labels
+        ``"<node><direction>"`` (e.g. ``"12+z"``) with coordinates ``node`` (label) and
+        ``direction`` (``+x +y +z +rx +ry +rz``); ``attrs`` ``normalisation = "mass"``,
+        ``source = "fe"``.
+
+        Raises
+        ------
+        ParameterError
+            If the result carries no DOF table (built by hand without ``dof_node_id``).
+        """
+        import xarray as xr
+
+        if self.dof_node_id is None or self.dof_component is None:
+            raise ParameterError("this ModalResult has no DOF table (dof_node_id, "
+                                 "dof_component); build it with modal_analysis")
+        dirs = np.array(["+x", "+y", "+z", "+rx", "+ry", "+rz"])[self.dof_component]
+        labels = [f"{n}{d}" for n, d in zip(self.dof_node_id, dirs)]
+        mode = np.arange(1, self.n_modes + 1)
+        return xr.DataArray(
+            np.asarray(self.shapes).T, dims=("mode", "dof"),
+            coords={"mode": mode, "fn_hz": ("mode", np.asarray(self.fn_hz)),
+                    "zeta": ("mode", np.full(self.n_modes, np.nan)),
+                    "mode_type": ("mode", list(self.mode_type)),
+                    "dof": labels, "node": ("dof", np.asarray(self.dof_node_id)),
+                    "direction": ("dof", dirs)},
+            attrs={"normalisation": "mass", "source": "fe"},
+        )
 
     @property
     def n_modes(self) -> int:
@@ -349,7 +387,9 @@ def modal_analysis(
             labels.append(ENERGY_PARTS[int(np.argmax(split[i]))])
         else:
             labels.append(mode_type(model, vecs[:, i]))
-    return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels))
+    return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
+                       dof_node_id=np.asarray(model.node_ids)[model.dof_node],
+                       dof_component=np.asarray(model.dof_component))
 
 
 def static_solve(model: FEModel, f: np.ndarray) -> np.ndarray:

@@ -104,6 +104,7 @@ import scipy.sparse as sp
 
 from ..errors import ConfigError, MvtkError
 from ._general import GENERAL_SUPPORTS, support_dofs
+from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._mesh import Patch
 from ._model import DOF_NAMES, FEModel
@@ -303,7 +304,8 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     if not isinstance(structure, Mapping):
         raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
     s = copy.deepcopy(dict(structure))
-    known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points"}
+    known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points",
+             "sections", "masses", "rigid_links"}
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
@@ -311,10 +313,21 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     materials = {str(k): _material(str(k), v) for k, v in mats_d.items()}
     st = _table(s, "structure", "")
     kind = st.get("type", "plate")
+    mesh_d = s.get("mesh")
+    if isinstance(mesh_d, Mapping) and "file" in mesh_d and kind != "mesh":
+        raise ConfigError(f"mesh.file needs structure.type = 'mesh' (got {kind!r}); an "
+                          "imported mesh replaces the built-in plate/beam generator")
+    if kind == "mesh":
+        return _build_mesh(s, st, materials, source)
+    for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
+                     ("rigid_links", "for imported meshes")):
+        if key in s:
+            raise ConfigError(f"{key}: not applicable to structure.type = {kind!r} ({why}, "
+                              "structure.type = 'mesh')")
     if kind == "beam":
         return _build_beam(s, st, materials, source)
     if kind != "plate":
-        raise ConfigError(f"structure.type: expected 'plate' or 'beam', got {kind!r}")
+        raise ConfigError(f"structure.type: expected 'plate', 'beam' or 'mesh', got {kind!r}")
     length, width, ks, layers = _base_section(st, materials)
 
     patches = []
@@ -511,6 +524,166 @@ def constrain_model(model: FEModel, supports: Mapping[str, Any],
         meta["recovery"] = meta["recovery"][:, sel]
     return replace(model, K=K, M=M, dof_node=model.dof_node[sel],
                    dof_component=model.dof_component[sel], meta=meta)
+
+
+_SHAPES = {
+    "rectangle": ("width", "height"),
+    "tube": ("outer_radius", "inner_radius"),
+    "i": ("height", "flange_width", "flange_thickness", "web_thickness"),
+    "box": ("height", "width", "web_thickness", "flange_thickness"),
+    "generic": ("A", "Iy", "Iz", "J"),
+}
+
+
+def _vec(d: Mapping, key: str, where: str, default):
+    v = d.get(key, default)
+    if (not isinstance(v, list | tuple) or len(v) != 3
+            or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)):
+        raise ConfigError(f"{where}{key}: expected 3 numbers [x, y, z], got {v!r}")
+    return tuple(float(x) for x in v)
+
+
+def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
+    """``[sections.<name>]`` of an imported mesh: shell laminates or beam sections."""
+    from . import _sections as secs
+    from ._meshio import BeamProperty, ShellSection
+
+    raw = s.get("sections")
+    if not isinstance(raw, Mapping) or not raw:
+        raise ConfigError("sections: an imported mesh needs [sections.<name>] tables "
+                          "(shell: layers; beam: shape and material)")
+    out = {}
+    for name, d in raw.items():
+        w = f"sections.{name}."
+        if not isinstance(d, Mapping):
+            raise ConfigError(f"sections.{name}: expected a table")
+        if "layers" in d:
+            _check_keys(d, f"sections.{name}", ("layers", "material_axis", "offset"))
+            lam = Laminate(tuple(_plies(d["layers"], materials, w + "layers")),
+                           shear_correction=ks)
+            out[name] = ShellSection(lam, _vec(d, "material_axis", w, [1.0, 0.0, 0.0]),
+                                     _number(d, "offset", w, positive=False, required=False,
+                                             default=0.0))
+            continue
+        shape = d.get("shape")
+        if shape not in _SHAPES:
+            raise ConfigError(f"sections.{name}: expected layers (shell) or shape (beam: "
+                              f"{', '.join(_SHAPES)}), got shape={shape!r}")
+        dims = _SHAPES[shape]
+        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset")
+                    + dims)
+        mat = d.get("material")
+        if mat not in materials:
+            raise ConfigError(f"{w}material: {mat!r} is not defined; defined materials: "
+                              f"{sorted(materials)}")
+        vals = {k: _number(d, k, w, positive=(k != "inner_radius"),
+                           required=(k != "inner_radius"), default=0.0) for k in dims}
+        try:
+            section = {"rectangle": secs.rectangle_section, "tube": secs.tube_section,
+                       "i": secs.i_section, "box": secs.box_section,
+                       "generic": secs.generic_section}[shape](materials[mat], **vals)
+        except MvtkError as err:
+            raise ConfigError(f"sections.{name}: {err}") from err
+        out[name] = BeamProperty(section, _vec(d, "orientation", w, [0.0, 0.0, 1.0]),
+                                 _vec(d, "offset", w, [0.0, 0.0, 0.0]))
+    return out
+
+
+def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
+    """The ``type = "mesh"`` branch of :func:`build_model` (imported mesh file)."""
+    from ._general import PointMass, RigidLink, Spring
+    from ._meshio import mesh_model, read_mesh
+
+    _check_keys(st, "structure", ("type", "shear_correction"),
+                {k: "the geometry comes from mesh.file" for k in ("length", "width",
+                                                                   "layers")})
+    ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
+    if "patches" in s:
+        raise ConfigError("patches: not applicable to an imported mesh; map the patch's "
+                          "element set to its own section in mesh.sections")
+    mesh_d = s.get("mesh")
+    if not isinstance(mesh_d, Mapping) or "file" not in mesh_d:
+        raise ConfigError("mesh.file: an imported structure needs [mesh] file = 'part.msh'")
+    _check_keys(mesh_d, "mesh", ("file", "sections"),
+                {k: "the mesh comes from mesh.file" for k in ("nx", "ny", "element_size",
+                                                              "n_elements")})
+    path = Path(str(mesh_d["file"]))
+    if not path.is_absolute() and source is not None:
+        path = Path(source).parent / path
+    sections = _mesh_sections(s, materials, ks)
+    mapping = mesh_d.get("sections")
+    if not isinstance(mapping, Mapping) or not mapping:
+        raise ConfigError("mesh.sections: expected a table { <element set> = '<section>' }")
+    for k, v in mapping.items():
+        if v not in sections:
+            raise ConfigError(f"mesh.sections.{k}: section {v!r} is not defined; defined "
+                              f"sections: {sorted(sections)}")
+    try:
+        mesh = read_mesh(path)
+    except MvtkError as err:
+        raise ConfigError(f"mesh.file: {err}") from err
+    node_sets = dict(mesh.node_sets)
+    for i, p in enumerate(s.get("points", [])):
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name, x, y, z")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y", "z"))
+        xyz = np.array([_number(p, k, f"points[{i}].", positive=False) for k in "xyz"])
+        if p["name"] in node_sets:
+            raise ConfigError(f"points[{i}].name: {p['name']!r} is already a set of the mesh")
+        node_sets[p["name"]] = np.array([int(np.argmin(np.linalg.norm(mesh.nodes - xyz,
+                                                                      axis=1)))])
+
+    def one_node(name: Any, where: str) -> int:
+        if name not in node_sets or len(node_sets[name]) != 1:
+            raise ConfigError(f"{where}: expected the name of a point or a one-node set, got "
+                              f"{name!r}")
+        return int(node_sets[name][0])
+
+    members: list[Any] = []
+    for i, m in enumerate(s.get("masses", [])):
+        w = f"masses[{i}]"
+        if not isinstance(m, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(m, w, ("point", "mass", "inertia", "offset"))
+        members.append(PointMass(one_node(m.get("point"), w + ".point"),
+                                 _number(m, "mass", w + ".", positive=False),
+                                 _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0]),
+                                 _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])))
+    for i, r in enumerate(s.get("rigid_links", [])):
+        w = f"rigid_links[{i}]"
+        if not isinstance(r, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(r, w, ("independent", "nodes", "kind", "dofs"))
+        if r.get("nodes") not in node_sets:
+            raise ConfigError(f"{w}.nodes: expected a node set, got {r.get('nodes')!r}; "
+                              f"available: {sorted(node_sets)}")
+        ind = one_node(r.get("independent"), w + ".independent")
+        dep = [n for n in node_sets[r["nodes"]] if n != ind]
+        members.append(RigidLink(ind, dep, str(r.get("kind", "rbe2")),
+                                 tuple(r.get("dofs", DOF_NAMES))))
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", ("supports", "springs"),
+                {k: "for the built-in plate/beam; use boundary.supports on a node set"
+                 for k in ("clamp", "clamp_stiffness", "clamp_translational_stiffness",
+                           "edges")})
+    for sp_ in _springs(b, allow_per_length=False):
+        set_name, dof, kval, _ = sp_
+        if set_name not in node_sets:
+            raise ConfigError(f"boundary.springs: node set {set_name!r} not found; "
+                              f"available: {sorted(node_sets)}")
+        members += [Spring(int(n), {dof: kval}) for n in node_sets[set_name]]
+    meta = {"structure": s}
+    if source is not None:
+        meta["source"] = source
+    try:
+        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                          members=members, supports=_supports(b), node_sets=node_sets,
+                          name=str(s.get("name", "")), meta=meta)
+    except MvtkError as err:
+        raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
+            from err
 
 
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
