@@ -14,14 +14,28 @@ from ._general import (
 )
 from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._matrices import read_matrices
 from ._mesh import (
     SUPPORT_TYPES,
+    ModelSize,
     Patch,
     PlateMesh,
     edge_dofs,
     edge_tributary_lengths,
+    estimate_plate_size,
+    memory_limit_bytes,
     rectangular_plate_mesh,
     support_components,
+)
+from ._meshio import (
+    BeamProperty,
+    ImportedMesh,
+    ShellSection,
+    from_meshio,
+    mesh_model,
+    read_mesh,
+    write_uff,
+    write_vtu,
 )
 from ._modal import (
     ENERGY_PARTS,
@@ -50,7 +64,7 @@ from ._sections import (
 from ._shell import DRILL_FACTOR, mitc4_matrices
 from ._shell3d import TRI_SHEAR_ALPHA, mitc3_matrices, shell_element_matrices, shell_frames
 from ._solvers import EigenSolution, eigsh_lowest, factorize
-from ._structure import build_model, get_by_path, load_structure, set_by_path
+from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
 
 __all__ = [
     "DOF_NAMES",
@@ -95,6 +109,19 @@ __all__ = [
     "box_section",
     "generic_section",
     "TRI_SHEAR_ALPHA",
+    "ImportedMesh",
+    "ShellSection",
+    "BeamProperty",
+    "read_mesh",
+    "from_meshio",
+    "mesh_model",
+    "write_vtu",
+    "write_uff",
+    "read_matrices",
+    "constrain_model",
+    "ModelSize",
+    "estimate_plate_size",
+    "memory_limit_bytes",
     "mitc3_matrices",
     "shell_element_matrices",
     "shell_frames",

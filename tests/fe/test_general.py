@@ -276,7 +276,6 @@ def test_clamped_circular_plate_triangles_leissa():
     assert np.all(lam_[:5] > [10.2158, 21.260, 21.260, 34.877, 34.877])
 
 
-@pytest.mark.slow
 def test_ring_as_shell_strip_in_plane_modes():
     """Curved shell: a ring (shell strip of facets) against the thin-ring closed form."""
     R, t, b, n_c = 0.5, 5e-3, 0.02, 96

@@ -144,3 +144,30 @@ def test_vtu_and_uff_export_and_to_xarray(tmp_path):
     n, c = model.dof_node[0], model.dof_component[0]
     assert da.dof.values[0] == f"{model.node_ids[n]}{['+x', '+y', '+z', '+rx', '+ry', '+rz'][c]}"
     assert da.attrs["normalisation"] == "mass" and np.isnan(da.zeta).all()
+
+
+def test_matrix_market_round_trip_with_dof_table(tmp_path):
+    import scipy.io
+
+    from mvtk.fe import read_matrices
+
+    model = plate_model(0.3, 0.2, [Ply(STEEL, 1e-3)], nx=6, ny=4, clamp="x0")
+    scipy.io.mmwrite(tmp_path / "K.mtx", model.K)
+    scipy.io.mmwrite(tmp_path / "M.mtx", model.M)
+    names = ["ux", "uy", "uz", "rx", "ry", "rz"]
+    (tmp_path / "dofs.csv").write_text("node,dof\n" + "".join(
+        f"{model.node_ids[n]},{names[c] if i % 2 else c + 1}\n"
+        for i, (n, c) in enumerate(zip(model.dof_node, model.dof_component))))
+    (tmp_path / "nodes.csv").write_text("node,x,y,z\n" + "".join(
+        f"{i},{x:.17g},{y:.17g},{z:.17g}\n" for i, (x, y, z) in zip(model.node_ids, model.nodes)))
+    third = read_matrices(tmp_path / "K.mtx", tmp_path / "M.mtx", tmp_path / "dofs.csv",
+                          tmp_path / "nodes.csv")
+    np.testing.assert_allclose(modal_analysis(third, 4).fn_hz,
+                               modal_analysis(model, 4).fn_hz, rtol=1e-9)
+    np.testing.assert_array_equal(third.node_ids[third.dof_node],
+                                  model.node_ids[model.dof_node])
+    (tmp_path / "bad.csv").write_text("node,dof\n1,7\n")
+    with pytest.raises(FormatError, match=r"DOF table row 1: dof '7' is not 1..6"):
+        read_matrices(model.K[:1, :1], model.M[:1, :1], tmp_path / "bad.csv")
+    with pytest.raises(Exception, match="the DOF table has 1 rows, the matrices 2"):
+        read_matrices(model.K[:2, :2], model.M[:2, :2], tmp_path / "bad.csv")
