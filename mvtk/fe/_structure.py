@@ -76,10 +76,19 @@ All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example
 A ``type = "beam"`` structure (layered Timoshenko beam along x,
 :func:`mvtk.fe.cantilever_beam`) takes the same materials, ``structure.length``,
 ``width``, ``layers``; patches use ``x0``, ``x1``, ``layers`` and optionally ``y0``/``y1``
-(only their difference, the patch width, matters); ``[mesh] n_elements = 40`` (or
-``nx``); ``[boundary] clamp = "x0" | "x1" | "free"`` and ``clamp_stiffness`` /
-``clamp_translational_stiffness`` per metre of clamp edge as for plates (multiplied by the
-width to the beam's total spring); points by ``x`` (``y`` ignored).
+(only their difference, the patch width, matters); ``[mesh]`` one of ``n_elements``,
+``nx`` or ``element_size``; ``[boundary] clamp = "x0" | "x1" | "free"`` and
+``clamp_stiffness`` / ``clamp_translational_stiffness`` per metre of clamp edge as for
+plates (multiplied by the width to the beam's total spring), ``supports`` and
+``[[boundary.springs]]`` (per node) on the node sets ``x0 x1 all``, points and patch
+ends; points by ``x`` (``y``, if given, within the width).
+
+Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
+the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
+structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
+``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
+data/structures/README.md. Every unknown or inapplicable key raises
+:class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
 ``patch:<name>:x0`` ... ``:y1``, and one set per point.
