@@ -46,6 +46,7 @@ from ._modal import (
     static_solve,
 )
 from ._model import DOF_NAMES, FEModel
+from ._nastran import read_nastran
 from ._piezo import (
     PiezoPatch,
     edge_moment_load,
@@ -118,6 +119,7 @@ __all__ = [
     "write_vtu",
     "write_uff",
     "read_matrices",
+    "read_nastran",
     "constrain_model",
     "ModelSize",
     "estimate_plate_size",

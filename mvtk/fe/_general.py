@@ -130,9 +130,9 @@ class ShellSet:
         the intended normal.
     section : Laminate
         Layers bottom (-normal side) to top; ply angles from the material axis.
-    material_axis : array_like (3,)
+    material_axis : array_like (3,) or (n_el, 3)
         Global direction whose projection on each element is the ply reference
-        direction ``e1`` (default global x).
+        direction ``e1`` (default global x), or one direction per element.
     offset : float
         Distance (m) from the node surface to the laminate mid-plane along the element
         normal (e.g. ``+t/2`` puts the nodes on the bottom face).
@@ -158,8 +158,16 @@ class ShellSet:
         if not np.isfinite(self.offset):
             raise ParameterError(f"shell set {self.name!r}: offset must be finite")
         object.__setattr__(self, "elements", el)
-        object.__setattr__(self, "material_axis",
-                           tuple(_vector3(self.material_axis, f"shell set {self.name!r}")))
+        axis = np.asarray(self.material_axis, dtype=float)
+        if axis.ndim == 2:
+            if axis.shape != (len(el), 3) or not np.all(np.isfinite(axis)):
+                raise ParameterError(
+                    f"shell set {self.name!r}: material_axis must be 3 numbers or finite "
+                    f"({len(el)}, 3) per element, got shape {axis.shape}")
+            object.__setattr__(self, "material_axis", axis)
+        else:
+            object.__setattr__(self, "material_axis", tuple(
+                _vector3(self.material_axis, f"shell set {self.name!r}")))
 
     def laminate(self) -> Laminate:
         """The section with the offset applied (reference surface = node surface)."""

@@ -191,10 +191,13 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
             ue = u[dofs]  # (n_el, 6 n, k)
             e = []
+            ax = np.asarray(axis, dtype=float)
+            if ax.ndim == 2:
+                ax = ax[start:start + _CHUNK]
             for abd_p, h_p, df in parts:
                 Ke, _ = shell_element_matrices(
                     model.nodes[c], abd_p[None], h_p[None], np.zeros((1, 3)),
-                    np.full(len(c), lam.thickness), axis, df)
+                    np.full(len(c), lam.thickness), ax, df)
                 e.append(np.einsum("eik,eij,ejk->ek", ue, Ke, ue, optimize=True))
             normal, twist, shear, membrane = e
             # transverse shear goes with the element's dominant curvature kind
@@ -279,7 +282,10 @@ def _smooth_trial_scale(model: FEModel) -> float:
 
 
 def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
-    """M-weighted share of each vector outside the span of the rigid-body motions."""
+    """M-weighted share of each vector outside the span of the rigid-body motions.
+
+    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
+    """
     xyz = model.nodes
     c = xyz.mean(axis=0)
     full = np.zeros((model.n_nodes, 6, 6))
@@ -294,10 +300,16 @@ def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
     keep = np.diag(G) > 1e-14 * max(np.diag(G).max(), 1e-300)
     R, MR, G = R[:, keep], MR[:, keep], G[np.ix_(keep, keep)]
     coef = np.linalg.lstsq(G, MR.T @ vectors, rcond=None)[0]
-    r = vectors - R @ coef
+    fit = R @ coef
+    r = vectors - fit
     num = np.einsum("ij,ij->j", r, model.M @ r)
     den = np.einsum("ij,ij->j", vectors, model.M @ vectors)
-    return num / np.where(den > 0, den, 1.0)
+    share = num / np.where(den > 0, den, 1.0)
+    # a rigid-body shape that loads the structure (a body on elastic supports) is not a
+    # rigid-body mode: its stiffness forces are far above round-off
+    kscale = max(float(np.abs(model.K.diagonal()).max(initial=0.0)), 1e-300)
+    force = np.abs(model.K @ fit).max(axis=0) / (kscale * np.abs(fit).max(axis=0) + 1e-300)
+    return np.where(force < 1e-8, share, np.inf)
 
 
 def _lowest_modes(model: FEModel, n: int, sigma: float | None):
