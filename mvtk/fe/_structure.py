@@ -318,7 +318,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
-    mats_d = _table(s, "materials", "")
+    mats_d = _table(s, "materials", "") if "materials" in s else {}
     materials = {str(k): _material(str(k), v) for k, v in mats_d.items()}
     st = _table(s, "structure", "")
     kind = st.get("type", "plate")
@@ -613,12 +613,14 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     mesh_d = s.get("mesh")
     if not isinstance(mesh_d, Mapping) or "file" not in mesh_d:
         raise ConfigError("mesh.file: an imported structure needs [mesh] file = 'part.msh'")
-    _check_keys(mesh_d, "mesh", ("file", "sections"),
-                {k: "the mesh comes from mesh.file" for k in ("nx", "ny", "element_size",
-                                                              "n_elements")})
     path = Path(str(mesh_d["file"]))
     if not path.is_absolute() and source is not None:
         path = Path(source).parent / path
+    if path.suffix.lower() in (".bdf", ".dat", ".nas"):
+        return _build_nastran(s, mesh_d, path, source)
+    _check_keys(mesh_d, "mesh", ("file", "sections"),
+                {k: "the mesh comes from mesh.file" for k in ("nx", "ny", "element_size",
+                                                              "n_elements")})
     sections = _mesh_sections(s, materials, ks)
     mapping = mesh_d.get("sections")
     if not isinstance(mapping, Mapping) or not mapping:
@@ -693,6 +695,41 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
+
+
+def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:
+    """``[mesh] file = "deck.bdf"``: the whole model (sections included) from the deck."""
+    from ._nastran import read_nastran
+
+    _check_keys(mesh_d, "mesh", ("file", "spc_id"),
+                {"sections": "a Nastran deck carries its own properties"})
+    for key in ("sections", "masses", "rigid_links"):
+        if key in s:
+            raise ConfigError(f"{key}: not applicable to a Nastran deck (it carries its own "
+                              "properties, CONM2 and RBE2 cards)")
+    spc = mesh_d.get("spc_id")
+    if spc is not None and (isinstance(spc, bool) or not isinstance(spc, int)):
+        raise ConfigError(f"mesh.spc_id: expected an integer SPC1 set id, got {spc!r}")
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", ("supports", "springs"))
+    try:
+        model = read_nastran(path, spc_id=spc, name=str(s.get("name", "")))
+    except MvtkError as err:
+        raise ConfigError(f"mesh.file: {err}") from err
+    sets = dict(model.node_sets)
+    for i, p in enumerate(s.get("points", [])):
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name, x, y, z")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y", "z"))
+        xyz = np.array([_number(p, k, f"points[{i}].", positive=False) for k in "xyz"])
+        sets[p["name"]] = np.array([model.nearest_node(xyz)])
+    meta = dict(model.meta, structure=s)
+    if source is not None:
+        meta["source"] = source
+    model = replace(model, node_sets=sets, meta=meta)
+    return constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
 
 
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:

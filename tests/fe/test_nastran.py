@@ -123,3 +123,35 @@ def test_bad_decks(tmp_path):
         read_nastran(p)
     with pytest.raises(FormatError, match="not found"):
         read_nastran(tmp_path / "missing.bdf")
+
+
+def test_pcomp_ctria3_deck_and_structure_toml(tmp_path):
+    from mvtk.fe import Laminate, OrthotropicMaterial, ShellSet, build_model
+
+    m = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4)
+    tris = np.concatenate([m.elements[:, [0, 1, 2]], m.elements[:, [0, 2, 3]]])
+    lines = ["BEGIN BULK\n"]
+    lines += [f"GRID,{i},,{x:.17g},{y:.17g},{z:.17g}\n"
+              for i, (x, y, z) in enumerate(m.nodes, start=1)]
+    lines += [f"CTRIA3,{e},3,{a + 1},{b + 1},{c + 1}\n" for e, (a, b, c) in
+              enumerate(tris, start=1)]
+    lines.append("PCOMP,3,,,,,,,SYM,+\n,8,2.5-4,0.,,8,2.5-4,90.\n")
+    lines.append("MAT8,8,1.4+11,1.0+10,0.3,5.0+9,5.0+9,3.5+9,1600.\n")
+    lines.append("SPC1,1,123456," + ",".join(str(i + 1) for i in m.node_sets["x0"]) + "\n")
+    (tmp_path / "c.bdf").write_text("".join(lines))
+    deck = read_nastran(tmp_path / "c.bdf")
+    cfrp = OrthotropicMaterial("cfrp", 140e9, 10e9, 5e9, 5e9, 3.5e9, 0.3, 1600.0)
+    lam = Laminate(tuple(Ply(cfrp, 2.5e-4, a) for a in (0, 90, 90, 0)))
+    # Nastran's material axis of a CTRIA3 is its G1-G2 edge: per element here
+    axes = m.nodes[tris[:, 1]] - m.nodes[tris[:, 0]]
+    ref = assemble_model(m.nodes, [ShellSet(tris, lam, material_axis=axes)],
+                         supports={"x0": "clamped"}, node_sets=m.node_sets)
+    np.testing.assert_allclose(modal_analysis(deck, 4).fn_hz, modal_analysis(ref, 4).fn_hz,
+                               rtol=1e-9)
+    toml = tmp_path / "c.toml"
+    toml.write_text('[structure]\ntype = "mesh"\n[mesh]\nfile = "c.bdf"\n'
+                    '[[points]]\nname = "tip"\nx = 0.3\ny = 0.1\nz = 0.0\n')
+    model = build_model(toml)
+    assert "tip" in model.node_sets
+    np.testing.assert_allclose(modal_analysis(model, 2).fn_hz, modal_analysis(deck, 2).fn_hz,
+                               rtol=1e-12)
