@@ -254,3 +254,23 @@ def test_plate_supports_on_node_sets():
     E, rho, L, h = 210e9, 7900.0, 0.2, 1e-3
     ref = np.pi / (2 * L**2) * np.sqrt(E * h**2 / 12 / rho)  # narrow strip: a beam
     assert res.fn_hz[0] == pytest.approx(ref, rel=0.01)
+
+
+def test_free_free_beam_reports_six_rigid_modes_sorted_at_zero():
+    """Issue 16: -n 6 on a free-free beam gave unsorted fn and rigid modes 'in-plane'."""
+    s = load_structure(DATA / "smart_beam_beam.toml")
+    s["boundary"]["clamp"] = "free"
+    model = build_model(s)
+    res = modal_analysis(model, 6)
+    assert res.mode_type == ("rigid",) * 6 and np.all(res.fn_hz == 0.0)
+    res9 = modal_analysis(model, 9)
+    assert res9.mode_type[:6] == ("rigid",) * 6
+    assert np.all(np.diff(res9.fn_hz) >= 0) and res9.fn_hz[6] > 10.0
+
+
+def test_mode_labels_are_deterministic_across_runs_and_mode_counts():
+    """Issue 12: a torsion mode was labelled 'torsion' or 'in-plane' at random."""
+    model = build_model(DATA / "smart_beam_beam.toml")
+    runs = [modal_analysis(model, n).mode_type[:6] for n in (6, 8, 6, 10)]
+    assert all(r == runs[0] for r in runs)
+    assert runs[0][:2] == ("bending", "torsion")
