@@ -158,7 +158,8 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     """
     from ._beam import _element_frames, timoshenko_element_matrices
     from ._laminate import Laminate
-    from ._shell3d import shell_element_matrices
+    from ._shell import mitc4_matrices
+    from ._shell3d import mitc3_matrices, shell_local_geometry
 
     phi = np.asarray(shapes, dtype=float)
     if phi.ndim == 1:
@@ -189,16 +190,26 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
         for start in range(0, len(conn), _CHUNK):
             c = conn[start:start + _CHUNK]
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
-            ue = u[dofs]  # (n_el, 6 n, k)
-            e = []
             ax = np.asarray(axis, dtype=float)
             if ax.ndim == 2:
                 ax = ax[start:start + _CHUNK]
+            xy, T = shell_local_geometry(model.nodes[c], ax)
+            ue = np.einsum("eij,ejk->eik", T, u[dofs])  # element-frame DOFs
+            # identical element shapes share their matrices (structured meshes)
+            scale = max(float(np.abs(xy).max()), 1e-300)
+            key = np.round(xy.reshape(len(c), -1) / (1e-10 * scale)).astype(np.int64)
+            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            inv = inv.ravel()
+            e = []
             for abd_p, h_p, df in parts:
-                Ke, _ = shell_element_matrices(
-                    model.nodes[c], abd_p[None], h_p[None], np.zeros((1, 3)),
-                    np.full(len(c), lam.thickness), ax, df)
-                e.append(np.einsum("eik,eij,ejk->ek", ue, Ke, ue, optimize=True))
+                if c.shape[1] == 4:
+                    Ku, _ = mitc4_matrices(xy[first], abd_p[None], h_p[None],
+                                           np.zeros((1, 3)), df)
+                else:
+                    Ku, _ = mitc3_matrices(xy[first], abd_p[None], h_p[None],
+                                           np.zeros((1, 3)), np.full(len(first),
+                                                                     lam.thickness), df)
+                e.append(np.einsum("eik,eij,ejk->ek", ue, Ku[inv], ue, optimize=True))
             normal, twist, shear, membrane = e
             # transverse shear goes with the element's dominant curvature kind
             to_twist = twist > normal

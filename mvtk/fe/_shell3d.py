@@ -74,6 +74,7 @@ __all__ = [
     "shell_frames",
     "mitc3_matrices",
     "shell_element_matrices",
+    "shell_local_geometry",
 ]
 
 #: Lyly-Stenberg shear stabilisation factor of the triangle (see module notes).
@@ -291,15 +292,34 @@ def shell_element_matrices(
         Global DOFs (ux, uy, uz, rx, ry, rz) per node, nodes in element order.
     """
     xyz = np.asarray(xyz, dtype=float)
+    local, T = shell_local_geometry(xyz, material_axis)
+    n_el, k = xyz.shape[:2]
+    if k == 4:
+        Kl, Ml = mitc4_matrices(local, abd, h_shear, inertia, drill_factor)
+    else:
+        Kl, Ml = mitc3_matrices(local, abd, h_shear, inertia,
+                                np.broadcast_to(thickness, (n_el,)), drill_factor)
+    Tt = np.swapaxes(T, 1, 2)
+    return Tt @ Kl @ T, Tt @ Ml @ T
+
+
+def shell_local_geometry(xyz: np.ndarray, material_axis=(1.0, 0.0, 0.0)
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """In-plane local coordinates and the global-to-element DOF transformation.
+
+    Returns
+    -------
+    xy : ndarray (n_el, k, 2)
+        Node coordinates in the element frame (origin at the centroid, mean plane).
+    T : ndarray (n_el, 6k, 6k)
+        ``q_local = T q_global``: frame rotation and, for warped quads, the rigid offset
+        of each node to the mean plane (see the module notes).
+    """
+    xyz = np.asarray(xyz, dtype=float)
     R = shell_frames(xyz, material_axis)
     n_el, k = xyz.shape[:2]
     c = xyz.mean(axis=1, keepdims=True)
     local = np.einsum("eij,eaj->eai", R, xyz - c)  # (n_el, k, 3) in (e1, e2, e3)
-    if k == 4:
-        Kl, Ml = mitc4_matrices(local[:, :, :2], abd, h_shear, inertia, drill_factor)
-    else:
-        Kl, Ml = mitc3_matrices(local[:, :, :2], abd, h_shear, inertia,
-                                np.broadcast_to(thickness, (n_el,)), drill_factor)
     T = _rotation_blocks(R, k)
     d = local[:, :, 2]  # distance of each node from the mean plane (warping)
     if np.any(np.abs(d) > 0):
@@ -313,5 +333,4 @@ def shell_element_matrices(
         for a in range(k):
             W[:, 6 * a:6 * a + 3, 6 * a + 3:6 * a + 6] = d[:, a, None, None] * cross
         T = T @ W
-    Tt = np.swapaxes(T, 1, 2)
-    return Tt @ Kl @ T, Tt @ Ml @ T
+    return local[:, :, :2], T
