@@ -10,7 +10,9 @@ VTK/VTU, MED, ...) into an :class:`ImportedMesh`: node coordinates, first-order 
   MED families) become **element sets**; each element set also defines a **node set**
   of the same name (the nodes of its cells), so a physical line "clamp" can carry a
   support;
-- meshio ``point_sets`` (Abaqus ``*NSET``) become node sets.
+- meshio ``point_sets`` (Abaqus ``*NSET``) become node sets;
+- any other integer cell data (VTU files, MED/medit references, Gmsh physical tags
+  without names) gives one element set per value, named ``"<key>:<value>"``.
 
 Node labels: meshio renumbers nodes 0..n-1 in file order; :attr:`FEModel.node_ids` of an
 imported model are ``1..n`` in that order.
@@ -153,6 +155,17 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
             for b, tags in enumerate(phys):
                 if dims[block_kind[b]] == int(dim):
                     add(str(name), b, np.flatnonzero(np.asarray(tags) == int(tag)))
+    # other integer cell data (VTU files, MED/medit refs, unnamed physical tags): one set
+    # per value, named "<key>:<value>"
+    for key, per_block in (m.cell_data or {}).items():
+        if key == "gmsh:geometrical" or (key == "gmsh:physical" and m.field_data):
+            continue
+        arrays = [np.asarray(a) for a in per_block]
+        if not all(a.ndim == 1 and np.issubdtype(a.dtype, np.integer) for a in arrays):
+            continue
+        for b, a in enumerate(arrays):
+            for v in np.unique(a):
+                add(f"{key}:{int(v)}", b, np.flatnonzero(a == v))
     esets = {n: {k: np.unique(np.concatenate(v)) for k, v in d.items()}
              for n, d in element_sets.items()}
     node_sets = {str(n): np.unique(np.concatenate([np.asarray(a, dtype=np.int64).ravel()

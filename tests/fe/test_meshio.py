@@ -171,3 +171,16 @@ def test_matrix_market_round_trip_with_dof_table(tmp_path):
         read_matrices(model.K[:1, :1], model.M[:1, :1], tmp_path / "bad.csv")
     with pytest.raises(Exception, match="the DOF table has 1 rows, the matrices 2"):
         read_matrices(model.K[:2, :2], model.M[:2, :2], tmp_path / "bad.csv")
+
+
+def test_integer_cell_data_of_a_vtu_becomes_element_sets(tmp_path):
+    m = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4)
+    region = (m.nodes[m.elements].mean(axis=1)[:, 0] > 0.15).astype(np.int64)
+    meshio.Mesh(m.nodes, [("quad", m.elements)], cell_data={"region": [region]}).write(
+        tmp_path / "r.vtu")
+    imported = read_mesh(tmp_path / "r.vtu")
+    assert sorted(imported.element_sets) == ["region:0", "region:1"]
+    lam = Laminate((Ply(STEEL, 1e-3),))
+    thick = Laminate((Ply(STEEL, 2e-3),))
+    model = mesh_model(imported, {"region:0": lam, "region:1": thick})
+    assert model.n_elements == len(m.elements)
