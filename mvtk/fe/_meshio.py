@@ -290,12 +290,15 @@ def _cells(model: FEModel) -> list[tuple[str, np.ndarray]]:
     return [(names[k], v) for k, v in model.elements.items() if k in names and len(v)]
 
 
-def write_vtu(model: FEModel, path: str | Path, result=None) -> Path:
-    """Write the mesh and (optionally) mode shapes to a VTU file for ParaView.
+def write_vtu(model: FEModel, path: str | Path, result=None,
+              fields: Mapping[str, np.ndarray] | None = None) -> Path:
+    """Write the mesh and (optionally) mode shapes and static results to a VTU file.
 
     Point data per mode ``k`` (1-based): ``mode_k_displacement`` (n_nodes, 3) and
-    ``mode_k_rotation`` (n_nodes, 3), mass-normalised; field data ``fn_hz``. Eliminated
-    DOFs (supports) are zero, rigid-link dependents are recovered.
+    ``mode_k_rotation`` (n_nodes, 3), mass-normalised; field data ``fn_hz``. Each entry
+    ``name -> x`` of ``fields`` (a free-DOF vector, e.g. from :func:`mvtk.fe.static_solve`)
+    gives ``name_displacement`` and ``name_rotation``. Eliminated DOFs (supports) are
+    zero, rigid-link dependents are recovered.
 
     Returns
     -------
@@ -311,6 +314,14 @@ def write_vtu(model: FEModel, path: str | Path, result=None) -> Path:
             point_data[f"mode_{k}_displacement"] = u[:, :3]
             point_data[f"mode_{k}_rotation"] = u[:, 3:]
         field_data["fn_hz"] = np.asarray(result.fn_hz, dtype=float)
+    for key, x in (fields or {}).items():
+        x = np.asarray(x, dtype=float)
+        if x.shape != (model.n_dof,):
+            raise ParameterError(f"field {key!r} must have shape ({model.n_dof},), got "
+                                 f"{x.shape}")
+        u = model.expand(x)
+        point_data[f"{key}_displacement"] = u[:, :3]
+        point_data[f"{key}_rotation"] = u[:, 3:]
     mesh = meshio.Mesh(model.nodes, _cells(model), point_data=point_data,
                        field_data=field_data)
     mesh.write(path, file_format="vtu")

@@ -126,8 +126,15 @@ def test_vtu_and_uff_export_and_to_xarray(tmp_path):
     pyuff = pytest.importorskip("pyuff")
     model = plate_model(0.3, 0.2, [Ply(STEEL, 1e-3)], nx=6, ny=4, clamp="x0")
     res = modal_analysis(model, 3)
-    write_vtu(model, tmp_path / "m.vtu", res)
+    from mvtk.fe import static_solve
+
+    f = np.zeros(model.n_dof)
+    f[model.dof_index(model.node_set("x1")[0], "uz")] = 1.0
+    x = static_solve(model, f)
+    write_vtu(model, tmp_path / "m.vtu", res, fields={"tip_load": x})
     back = meshio.read(tmp_path / "m.vtu")
+    np.testing.assert_allclose(back.point_data["tip_load_displacement"],
+                               model.expand(x)[:, :3])
     full = model.expand(res.shapes)
     np.testing.assert_allclose(back.point_data["mode_2_displacement"], full[:, :3, 1])
     np.testing.assert_array_equal(back.point_data["node_id"], model.node_ids)
