@@ -72,6 +72,8 @@ __all__ = [
     "support_dofs",
 ]
 
+_CHUNK = 8192  # shell elements per assembly chunk
+
 GENERAL_SUPPORTS: dict[str, tuple[str, ...]] = {
     "clamped": ("ux", "uy", "uz", "rx", "ry", "rz"),
     "pinned": ("ux", "uy", "uz"),
@@ -547,12 +549,20 @@ def assemble_model(
                 raise ParameterError(f"shell set {mbr.name!r}: node index outside "
                                      f"0..{n_nodes - 1}")
             lam = mbr.laminate()
-            xyz = nodes[el]
-            Ke, Me = shell_element_matrices(
-                xyz, lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]),
-                np.full(len(el), lam.thickness), mbr.material_axis, drill_factor)
-            np.add.at(normals, el.ravel(), np.repeat(shell_frames(xyz)[:, 2], el.shape[1],
-                                                     axis=0))
+            axis = np.asarray(mbr.material_axis, dtype=float)
+            # in chunks: element matrices of large meshes never exist all at once
+            for start in range(0, len(el), _CHUNK):
+                c = el[start:start + _CHUNK]
+                xyz = nodes[c]
+                Ke, Me = shell_element_matrices(
+                    xyz, lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]),
+                    np.full(len(c), lam.thickness),
+                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
+                np.add.at(normals, c.ravel(), np.repeat(shell_frames(xyz)[:, 2], c.shape[1],
+                                                        axis=0))
+                dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
+                K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
+                M = M + assemble_element_matrices(Me, dofs, ident, n_all)
             kind = "mitc4" if el.shape[1] == 4 else "mitc3"
         elif isinstance(mbr, BeamSet):
             el = mbr.elements
@@ -589,9 +599,10 @@ def assemble_model(
             continue
         else:
             raise ParameterError(f"member {i}: unsupported type {type(mbr).__name__}")
-        dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
-        K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
-        M = M + assemble_element_matrices(Me, dofs, ident, n_all)
+        if kind == "beam2":
+            dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
+            K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
+            M = M + assemble_element_matrices(Me, dofs, ident, n_all)
         if kind == "beam2":
             beam_groups.append((counts[kind] + np.arange(len(el)), mbr.section,
                                 mbr.orientation, mbr.offset))
