@@ -191,3 +191,21 @@ def test_integer_cell_data_of_a_vtu_becomes_element_sets(tmp_path):
     thick = Laminate((Ply(STEEL, 2e-3),))
     model = mesh_model(imported, {"region:0": lam, "region:1": thick})
     assert model.n_elements == len(m.elements)
+
+
+def test_abaqus_inp_element_and_node_sets(tmp_path):
+    m = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4)
+    left = np.flatnonzero(m.nodes[m.elements].mean(axis=1)[:, 0] < 0.15)
+    right = np.setdiff1d(np.arange(len(m.elements)), left)
+    meshio.Mesh(m.nodes, [("quad", m.elements)],
+                cell_sets={"THIN": [left], "THICK": [right]},
+                point_sets={"CLAMP": m.node_sets["x0"]}).write(tmp_path / "p.inp")
+    imported = read_mesh(tmp_path / "p.inp")
+    assert {"THIN", "THICK", "CLAMP"} <= set(imported.node_sets)
+    np.testing.assert_array_equal(imported.node_sets["CLAMP"], m.node_sets["x0"])
+    model = mesh_model(imported, {"THIN": Laminate((Ply(STEEL, 1e-3),)),
+                                  "THICK": Laminate((Ply(STEEL, 1e-3),))},
+                       supports={"CLAMP": "clamped"})
+    ref = plate_model(0.3, 0.2, [Ply(STEEL, 1e-3)], nx=6, ny=4, clamp="x0")
+    np.testing.assert_allclose(modal_analysis(model, 3).fn_hz, modal_analysis(ref, 3).fn_hz,
+                               rtol=1e-8)
