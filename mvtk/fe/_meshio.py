@@ -98,11 +98,25 @@ def read_mesh(path: str | Path) -> ImportedMesh:
     path = Path(path)
     if not path.exists():
         raise FormatError(f"mesh file {str(path)!r} not found")
+    import contextlib
+    import io
+
+    captured = io.StringIO()
     try:
-        m = meshio.read(path)
+        # meshio prints notes (and a blank line for Gmsh files) on stdout, which would
+        # corrupt `mvtk modes --json`: capture them and pass them on as a warning
+        with contextlib.redirect_stdout(captured), contextlib.redirect_stderr(captured):
+            m = meshio.read(path)
     except Exception as err:  # meshio raises many types (ReadError, KeyError, ...)
         raise FormatError(f"mesh file {str(path)!r}: meshio could not read it "
                           f"({type(err).__name__}: {err})") from err
+    if captured.getvalue().strip():
+        import warnings
+
+        from ..errors import MvtkWarning
+
+        warnings.warn(f"meshio reading {str(path)!r}: {captured.getvalue().strip()}",
+                      MvtkWarning, stacklevel=2)
     return from_meshio(m, str(path))
 
 
