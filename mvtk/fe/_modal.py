@@ -10,7 +10,8 @@ from ..errors import DimensionError, ParameterError
 from ._model import FEModel
 from ._solvers import eigsh_lowest, factorize
 
-__all__ = ["ModalResult", "modal_analysis", "static_solve", "mode_type"]
+__all__ = ["ModalResult", "modal_analysis", "static_solve", "mode_type", "energy_split",
+           "ENERGY_PARTS"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -28,8 +29,12 @@ class ModalResult:
     rigid : ndarray of bool (n,)
         True for rigid-body modes.
     mode_type : tuple of str
-        ``"rigid"``, ``"bending"``, ``"torsion"`` or ``"in-plane"`` (see
+        ``"rigid"``, ``"bending"``, ``"torsion"``, ``"in-plane"`` or ``"axial"`` (see
         :func:`mode_type`).
+    dof_node_id : ndarray of int (n_dof,), optional
+        Node label (:attr:`FEModel.node_ids`) of each row of ``shapes``.
+    dof_component : ndarray of int (n_dof,), optional
+        Component (index into ``DOF_NAMES``) of each row of ``shapes``.
     """
 
     fn_hz: np.ndarray
@@ -37,6 +42,40 @@ class ModalResult:
     shapes: np.ndarray
     rigid: np.ndarray
     mode_type: tuple[str, ...]
+    dof_node_id: np.ndarray | None = None
+    dof_component: np.ndarray | None = None
+
+    def to_xarray(self):
+        """Mode shapes as an ``xarray.DataArray`` with dims ``("mode", "dof")``.
+
+        Follows docs/conventions.md: ``mode`` 1-based with coordinates ``fn_hz``,
+        ``zeta`` (NaN: undamped FE modes) and ``mode_type``; ``dof`` labels
+        ``"<node><direction>"`` (e.g. ``"12+z"``) with coordinates ``node`` (label) and
+        ``direction`` (``+x +y +z +rx +ry +rz``); ``attrs`` ``normalisation = "mass"``,
+        ``source = "fe"``.
+
+        Raises
+        ------
+        ParameterError
+            If the result carries no DOF table (built by hand without ``dof_node_id``).
+        """
+        import xarray as xr
+
+        if self.dof_node_id is None or self.dof_component is None:
+            raise ParameterError("this ModalResult has no DOF table (dof_node_id, "
+                                 "dof_component); build it with modal_analysis")
+        dirs = np.array(["+x", "+y", "+z", "+rx", "+ry", "+rz"])[self.dof_component]
+        labels = [f"{n}{d}" for n, d in zip(self.dof_node_id, dirs)]
+        mode = np.arange(1, self.n_modes + 1)
+        return xr.DataArray(
+            np.asarray(self.shapes).T, dims=("mode", "dof"),
+            coords={"mode": mode, "fn_hz": ("mode", np.asarray(self.fn_hz)),
+                    "zeta": ("mode", np.full(self.n_modes, np.nan)),
+                    "mode_type": ("mode", list(self.mode_type)),
+                    "dof": labels, "node": ("dof", np.asarray(self.dof_node_id)),
+                    "direction": ("dof", dirs)},
+            attrs={"normalisation": "mass", "source": "fe"},
+        )
 
     @property
     def n_modes(self) -> int:
@@ -57,53 +96,167 @@ class ModalResult:
         return self.to_dataframe().to_html(index=False)
 
 
-def _mirror_map(nodes: np.ndarray) -> np.ndarray | None:
-    """Index of each node's mirror image about the plane y = mid-width (None if absent)."""
-    y = nodes[:, 1]
-    mid = 0.5 * (y.min() + y.max())
-    scale = max(float(np.ptp(nodes[:, :2])), 1e-300)
-    key = np.round(nodes[:, :2] / (1e-7 * scale)).astype(np.int64)
-    mkey = np.round(np.column_stack([nodes[:, 0], 2 * mid - y]) / (1e-7 * scale)).astype(
-        np.int64)
-    lookup = {tuple(k): i for i, k in enumerate(key)}
-    out = np.empty(len(nodes), dtype=np.int64)
-    for i, k in enumerate(mkey):
-        j = lookup.get(tuple(k))
-        if j is None:
-            return None
-        out[i] = j
+#: Names of the strain-energy parts of :func:`energy_split`, in column order.
+ENERGY_PARTS: tuple[str, ...] = ("bending", "torsion", "in-plane", "axial")
+_CHUNK = 4096
+
+
+def _shell_groups(model: FEModel):
+    """(kind, element indices, Laminate, material axis) of every shell group."""
+    groups = model.meta.get("shell_groups")
+    if groups is not None:
+        return groups
+    if "mitc4" in model.elements and "sections" in model.meta \
+            and "element_section" in model.meta:
+        sec = np.asarray(model.meta["element_section"])
+        return [("mitc4", np.flatnonzero(sec == i), lam, (1.0, 0.0, 0.0))
+                for i, lam in enumerate(model.meta["sections"])]
+    return []
+
+
+def _beam_groups(model: FEModel):
+    """(element indices, BeamSection, orientation, offset) of every beam group."""
+    groups = model.meta.get("beam_groups")
+    if groups is not None:
+        return groups
+    if "beam2" in model.elements and model.meta.get("kind") == "timoshenko_beam":
+        from ._beam import BeamSection
+
+        sec = np.asarray(model.meta["element_section"])
+        return [(np.flatnonzero(sec == i), BeamSection(**d), (0.0, 1.0, 0.0), (0.0, 0.0, 0.0))
+                for i, d in enumerate(model.meta["sections"])]
+    return []
+
+
+def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
+    """Strain energy of mode shapes split into bending, torsion, in-plane and axial parts.
+
+    Parameters
+    ----------
+    model : FEModel
+        A model built by mvtk (plates, beams, :func:`mvtk.fe.assemble_model`, imported
+        meshes), whose element groups are recorded in ``meta``.
+    shapes : ndarray, shape (n_dof,) or (n_dof, n_modes)
+
+    Returns
+    -------
+    ndarray, shape (n_modes, 4)
+        Energy (J for unit modal amplitude) in the parts :data:`ENERGY_PARTS`:
+
+        - shells (in each element's frame, ply axes from the material axis):
+          ``bending`` = normal curvatures ``k' D_n k`` with ``D_n`` the D11, D12, D22
+          terms; ``torsion`` = twist ``D66 k12^2``; the transverse shear energy
+          ``g' H g`` of an element joins its larger of the two (thick strips twist
+          through transverse shear);
+          ``in-plane`` = membrane ``e' A e`` plus the drilling penalty. The coupling terms
+          (B, D16, D26) belong to no part and are left out.
+        - beams: ``bending`` = flexure and shear in both planes, ``torsion`` = GJ,
+          ``axial`` = EA.
+
+        Springs, masses and rigid links carry no part. A model without recorded element
+        groups (e.g. assembled matrices) gives NaN.
+    """
+    from ._beam import _element_frames, timoshenko_element_matrices
+    from ._laminate import Laminate
+    from ._shell import mitc4_matrices
+    from ._shell3d import mitc3_matrices, shell_local_geometry
+
+    phi = np.asarray(shapes, dtype=float)
+    if phi.ndim == 1:
+        phi = phi[:, None]
+    if phi.shape[0] != model.n_dof:
+        raise DimensionError(f"expected {model.n_dof} rows of mode shapes, got {phi.shape[0]}")
+    k = phi.shape[1]
+    out = np.zeros((k, 4))
+    shells, beams = _shell_groups(model), _beam_groups(model)
+    if not shells and not beams:
+        return np.full((k, 4), np.nan)
+    u = model.expand(phi).reshape(model.n_nodes * 6, k)
+    drill = model.meta.get("drill_factor")
+    for kind, idx, lam, axis in shells:
+        assert isinstance(lam, Laminate)
+        conn = model.elements[kind][idx]
+        abd = lam.ABD
+        zero2 = np.zeros((2, 2))
+        parts = []
+        a_only = np.zeros((6, 6))
+        a_only[:3, :3] = abd[:3, :3]
+        d_n = np.zeros((6, 6))
+        d_n[3:5, 3:5] = abd[3:5, 3:5]
+        d_t = np.zeros((6, 6))
+        d_t[5, 5] = abd[5, 5]
+        parts = [(d_n, zero2, 0.0), (d_t, zero2, 0.0), (np.zeros((6, 6)), lam.H, 0.0),
+                 (a_only, zero2, 1e-3 if drill is None else drill)]
+        for start in range(0, len(conn), _CHUNK):
+            c = conn[start:start + _CHUNK]
+            dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
+            ax = np.asarray(axis, dtype=float)
+            if ax.ndim == 2:
+                ax = ax[start:start + _CHUNK]
+            xy, T = shell_local_geometry(model.nodes[c], ax)
+            ue = np.einsum("eij,ejk->eik", T, u[dofs])  # element-frame DOFs
+            # identical element shapes share their matrices (structured meshes)
+            scale = max(float(np.abs(xy).max()), 1e-300)
+            key = np.round(xy.reshape(len(c), -1) / (1e-10 * scale)).astype(np.int64)
+            _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
+            inv = inv.ravel()
+            e = []
+            for abd_p, h_p, df in parts:
+                if c.shape[1] == 4:
+                    Ku, _ = mitc4_matrices(xy[first], abd_p[None], h_p[None],
+                                           np.zeros((1, 3)), df)
+                else:
+                    Ku, _ = mitc3_matrices(xy[first], abd_p[None], h_p[None],
+                                           np.zeros((1, 3)), np.full(len(first),
+                                                                     lam.thickness), df)
+                e.append(np.einsum("eik,eij,ejk->ek", ue, Ku[inv], ue, optimize=True))
+            normal, twist, shear, membrane = e
+            # transverse shear goes with the element's dominant curvature kind
+            to_twist = twist > normal
+            out[:, 0] += (normal + np.where(to_twist, 0.0, shear)).sum(axis=0)
+            out[:, 1] += (twist + np.where(to_twist, shear, 0.0)).sum(axis=0)
+            out[:, 2] += membrane.sum(axis=0)
+    for idx, sec, orient, offset in beams:
+        conn = model.elements["beam2"][idx]
+        off = np.asarray(offset, dtype=float)
+        L, R = _element_frames(model.nodes[conn[:, 0]] + off, model.nodes[conn[:, 1]] + off,
+                               orient)
+        Kl, _ = timoshenko_element_matrices(L, sec.EA, sec.GJ, sec.EIy, sec.EIz, sec.kGAz,
+                                            sec.kGAy, sec.rhoA, sec.rhoIy, sec.rhoIz)
+        dofs = (conn[:, :, None] * 6 + np.arange(6)).reshape(len(conn), 12)
+        ue = u[dofs]  # global (n_el, 12, k)
+        ue = ue.reshape(len(conn), 4, 3, k)
+        if np.any(off):
+            # translations of the axis: u + theta x e
+            th = ue[:, [1, 3]]
+            shift = np.cross(th, off[None, None, :, None], axis=2)
+            ue = ue.copy()
+            ue[:, [0, 2]] += shift
+        ul = np.einsum("eij,ebjk->ebik", R, ue).reshape(len(conn), 12, k)
+        for col, sel in ((3, [0, 6]), (1, [3, 9]), (0, [1, 2, 4, 5, 7, 8, 10, 11])):
+            Ks = Kl[:, sel][:, :, sel]
+            us = ul[:, sel]
+            out[:, col] += np.einsum("eik,eij,ejk->k", us, Ks, us, optimize=True)
     return out
 
 
-def mode_type(model: FEModel, shape: np.ndarray, mirror: np.ndarray | None = None) -> str:
-    """Label an elastic mode shape of a plate or beam model lying along x in the x-y plane.
+def mode_type(model: FEModel, shape: np.ndarray) -> str:
+    """Label an elastic mode ``"bending"``, ``"torsion"``, ``"in-plane"`` or ``"axial"``.
 
-    The modal kinetic energy ``phi_i (M phi)_i`` is summed per DOF component.
-    ``"in-plane"`` when ux and uy carry more of it than uz. Otherwise, for a plate (nodes
-    spread in y) ``"torsion"`` when the uz field is mainly antisymmetric about the
-    mid-width line y = (y_min + y_max)/2, else ``"bending"`` (without a mirror-symmetric
-    node layout: ``"torsion"`` when the rotations rx outweigh ry); for a beam (all nodes on
-    a line) ``"torsion"`` when rx carries more energy than uz. A heuristic for strips and
-    plates clamped on an x edge; it does not distinguish bending directions.
+    The label is the largest part of the mode's strain energy (:func:`energy_split`);
+    ties go to the first in :data:`ENERGY_PARTS`. It depends on no node order, mesh
+    symmetry or eigenvector sign, so it is the same for every run and for a rotated copy
+    of the model (with the material axis rotated too). Models without element groups
+    (assembled matrices) are labelled from the kinetic energy per DOF component:
+    ``"in-plane"`` when ux and uy carry more than uz, else ``"bending"``.
     """
+    e = energy_split(model, shape)[0]
+    if np.all(np.isfinite(e)) and e.sum() > 0:
+        return ENERGY_PARTS[int(np.argmax(e))]
     phi = np.asarray(shape, dtype=float)
-    e = phi * (model.M @ phi)
-    comp = np.bincount(model.dof_component, weights=e, minlength=6)
-    if comp[0] + comp[1] > comp[2]:
-        return "in-plane"
-    if np.ptp(model.nodes[:, 1]) == 0:
-        return "torsion" if comp[3] > comp[2] else "bending"
-    if mirror is None:
-        mirror = _mirror_map(model.nodes)
-    u = model.expand(phi)
-    if mirror is None:
-        # no mirror-symmetric node layout: twist (rx, slope across the width) against
-        # bending rotation (ry, slope along x)
-        return "torsion" if np.sum(u[:, 3] ** 2) > np.sum(u[:, 4] ** 2) else "bending"
-    w = u[:, 2]
-    anti = float(np.sum((w - w[mirror]) ** 2))
-    sym = float(np.sum((w + w[mirror]) ** 2))
-    return "torsion" if anti > sym else "bending"
+    ke = phi * (model.M @ phi)
+    comp = np.bincount(model.dof_component, weights=ke, minlength=6)
+    return "in-plane" if comp[0] + comp[1] > comp[2] else "bending"
 
 
 def _smooth_trial_scale(model: FEModel) -> float:
@@ -139,6 +292,37 @@ def _smooth_trial_scale(model: FEModel) -> float:
     return best
 
 
+def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
+    """M-weighted share of each vector outside the span of the rigid-body motions.
+
+    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
+    """
+    xyz = model.nodes
+    c = xyz.mean(axis=0)
+    full = np.zeros((model.n_nodes, 6, 6))
+    for j in range(3):
+        full[:, j, j] = 1.0
+        axis = np.eye(3)[j]
+        full[:, :3, 3 + j] = np.cross(axis, xyz - c)
+        full[:, 3 + j, 3 + j] = 1.0
+    R = full.reshape(model.n_nodes * 6, 6)[model.dof_node * 6 + model.dof_component]
+    MR = model.M @ R
+    G = R.T @ MR
+    keep = np.diag(G) > 1e-14 * max(np.diag(G).max(), 1e-300)
+    R, MR, G = R[:, keep], MR[:, keep], G[np.ix_(keep, keep)]
+    coef = np.linalg.lstsq(G, MR.T @ vectors, rcond=None)[0]
+    fit = R @ coef
+    r = vectors - fit
+    num = np.einsum("ij,ij->j", r, model.M @ r)
+    den = np.einsum("ij,ij->j", vectors, model.M @ vectors)
+    share = num / np.where(den > 0, den, 1.0)
+    # a rigid-body shape that loads the structure (a body on elastic supports) is not a
+    # rigid-body mode: its stiffness forces are far above round-off
+    kscale = max(float(np.abs(model.K.diagonal()).max(initial=0.0)), 1e-300)
+    force = np.abs(model.K @ fit).max(axis=0) / (kscale * np.abs(fit).max(axis=0) + 1e-300)
+    return np.where(force < 1e-8, share, np.inf)
+
+
 def _lowest_modes(model: FEModel, n: int, sigma: float | None):
     """Lowest eigenpairs by :func:`mvtk.fe.eigsh_lowest` (one factorisation).
 
@@ -170,7 +354,13 @@ def modal_analysis(
         quadratic bending field, a few times below the first elastic eigenvalue.
     rigid_tol_hz : float, optional
         Modes below this frequency are rigid-body modes. Default:
-        ``|omega2| < 1e-8 * max(|omega2|)``, and at least below 1e-3 Hz.
+        ``|omega2| < max(1e-7 max|omega2|, (2 pi 1e-3 Hz)^2)``; and also a mode whose
+        ``|omega2|`` is below ``1e-5 q`` (``q`` the Rayleigh quotient of smooth trial
+        fields, an estimate of the first elastic eigenvalue) and whose shape is a
+        rigid-body field (M-weighted residual after projection on the six rigid-body
+        motions below 1e-4), so that a free-free model asked for no more modes than it
+        has rigid-body modes is still classified. Rigid modes are reported at 0 Hz and
+        first; modes are sorted.
 
     Notes
     -----
@@ -192,18 +382,37 @@ def modal_analysis(
     sol = _lowest_modes(model, int(n_modes), sigma)
     w2 = sol.omega2
     if rigid_tol_hz is None:
-        scale = float(np.max(np.abs(w2))) if w2.size else 0.0
-        thresh = max(1e-8 * scale, (2 * np.pi * 1e-3) ** 2)
+        # relative to the elastic scale: the largest computed eigenvalue or, when every
+        # computed mode may be rigid (free-free, n_modes <= 6), the Rayleigh quotient of
+        # smooth trial fields (an estimate of the first elastic eigenvalue)
+        thresh = max(1e-7 * float(np.max(np.abs(w2))) if w2.size else 0.0,
+                     (2 * np.pi * 1e-3) ** 2)
+        rigid = np.abs(w2) < thresh
+        trial = _smooth_trial_scale(model)
+        if np.isfinite(trial):
+            # a rigid-body shape with an eigenvalue far below the smooth-field estimate
+            # of the first elastic one is rigid too
+            cand = ~rigid & (np.abs(w2) < 1e-5 * trial)
+            if np.any(cand):
+                cand[cand] = _rigid_residual(model, sol.vectors[:, cand]) < 1e-4
+                rigid |= cand
     else:
-        thresh = (2 * np.pi * float(rigid_tol_hz)) ** 2
-    rigid = np.abs(w2) < thresh
+        rigid = np.abs(w2) < (2 * np.pi * float(rigid_tol_hz)) ** 2
     fn = np.where(rigid, 0.0, np.sqrt(np.abs(w2)) / (2 * np.pi))
-    mirror = _mirror_map(model.nodes)
-    labels = tuple(
-        "rigid" if r else mode_type(model, sol.vectors[:, i], mirror)
-        for i, r in enumerate(rigid)
-    )
-    return ModalResult(fn_hz=fn, omega2=w2, shapes=sol.vectors, rigid=rigid, mode_type=labels)
+    order = np.lexsort((w2, fn))
+    w2, fn, rigid, vecs = w2[order], fn[order], rigid[order], sol.vectors[:, order]
+    split = energy_split(model, vecs)
+    labels = []
+    for i, r in enumerate(rigid):
+        if r:
+            labels.append("rigid")
+        elif np.all(np.isfinite(split[i])) and split[i].sum() > 0:
+            labels.append(ENERGY_PARTS[int(np.argmax(split[i]))])
+        else:
+            labels.append(mode_type(model, vecs[:, i]))
+    return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
+                       dof_node_id=np.asarray(model.node_ids)[model.dof_node],
+                       dof_component=np.asarray(model.dof_component))
 
 
 def static_solve(model: FEModel, f: np.ndarray) -> np.ndarray:

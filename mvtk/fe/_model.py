@@ -61,6 +61,12 @@ class FEModel:
         Free text name.
     meta : mapping
         Any further description (structure dict, mesh sizes, ...). Not used by solvers.
+        ``meta["recovery"]``, when present, is a sparse (n_nodes * 6, n_dof) matrix
+        giving every nodal DOF (including those eliminated by rigid links) from the free
+        ones; :meth:`expand` uses it.
+    node_ids : ndarray of int, shape (n_nodes,), optional
+        External node labels (e.g. the ids of an imported mesh or of test software);
+        default ``1..n_nodes``. Must be unique.
     """
 
     nodes: np.ndarray
@@ -72,11 +78,25 @@ class FEModel:
     elements: Mapping[str, np.ndarray] = field(default_factory=dict)
     name: str = ""
     meta: Mapping[str, Any] = field(default_factory=dict)
+    node_ids: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         nodes = np.asarray(self.nodes, dtype=float)
         if nodes.ndim != 2 or nodes.shape[1] != 3:
             raise DimensionError(f"nodes must have shape (n_nodes, 3), got {nodes.shape}")
+        if self.node_ids is None:
+            ids = np.arange(1, len(nodes) + 1, dtype=np.int64)
+        else:
+            ids = np.asarray(self.node_ids)
+            if ids.shape != (len(nodes),) or not np.issubdtype(ids.dtype, np.integer):
+                raise DimensionError(
+                    f"node_ids must be {len(nodes)} integers (one per node), got "
+                    f"shape {ids.shape} of {ids.dtype}"
+                )
+            if np.unique(ids).size != ids.size:
+                raise DimensionError("node_ids must be unique")
+            ids = ids.astype(np.int64)
+        object.__setattr__(self, "node_ids", ids)
         M = sp.csr_matrix(self.M)
         K = sp.csr_matrix(self.K)
         n = K.shape[0]
@@ -195,11 +215,16 @@ class FEModel:
         Returns
         -------
         ndarray, shape (n_nodes, 6) or (n_nodes, 6, k)
-            Constrained DOFs are zero.
+            Constrained DOFs are zero; DOFs eliminated by rigid links are recovered from
+            ``meta["recovery"]`` when present.
         """
         x = np.asarray(x)
         if x.shape[0] != self.n_dof:
             raise DimensionError(f"expected {self.n_dof} rows, got {x.shape[0]}")
-        out = np.zeros((self.n_nodes * 6, *x.shape[1:]), dtype=x.dtype)
-        out[self.dof_node * 6 + self.dof_component] = x
+        T = self.meta.get("recovery")
+        if T is not None:
+            out = np.asarray(T @ x)
+        else:
+            out = np.zeros((self.n_nodes * 6, *x.shape[1:]), dtype=x.dtype)
+            out[self.dof_node * 6 + self.dof_component] = x
         return out.reshape(self.n_nodes, 6, *x.shape[1:])

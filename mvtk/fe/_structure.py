@@ -76,10 +76,19 @@ All quantities in SI (m, Pa, kg/m^3, degrees for ply angles). A complete example
 A ``type = "beam"`` structure (layered Timoshenko beam along x,
 :func:`mvtk.fe.cantilever_beam`) takes the same materials, ``structure.length``,
 ``width``, ``layers``; patches use ``x0``, ``x1``, ``layers`` and optionally ``y0``/``y1``
-(only their difference, the patch width, matters); ``[mesh] n_elements = 40`` (or
-``nx``); ``[boundary] clamp = "x0" | "x1" | "free"`` and ``clamp_stiffness`` /
-``clamp_translational_stiffness`` per metre of clamp edge as for plates (multiplied by the
-width to the beam's total spring); points by ``x`` (``y`` ignored).
+(only their difference, the patch width, matters); ``[mesh]`` one of ``n_elements``,
+``nx`` or ``element_size``; ``[boundary] clamp = "x0" | "x1" | "free"`` and
+``clamp_stiffness`` / ``clamp_translational_stiffness`` per metre of clamp edge as for
+plates (multiplied by the width to the beam's total spring), ``supports`` and
+``[[boundary.springs]]`` (per node) on the node sets ``x0 x1 all``, points and patch
+ends; points by ``x`` (``y``, if given, within the width).
+
+Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
+the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
+structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
+``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
+data/structures/README.md. Every unknown or inapplicable key raises
+:class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
 ``patch:<name>:x0`` ... ``:y1``, and one set per point.
@@ -94,19 +103,23 @@ from __future__ import annotations
 
 import copy
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..errors import ConfigError, MvtkError
+from ._general import GENERAL_SUPPORTS, support_dofs
+from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._mesh import Patch
-from ._model import FEModel
+from ._model import DOF_NAMES, FEModel
 from ._plate import SpringSupport, plate_model
 
-__all__ = ["build_model", "load_structure", "set_by_path", "get_by_path"]
+__all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "constrain_model"]
 
 _ORTHO_KEYS = ("E1", "E2", "G12", "G13", "G23", "nu12", "rho")
 
@@ -300,18 +313,30 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     if not isinstance(structure, Mapping):
         raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
     s = copy.deepcopy(dict(structure))
-    known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points"}
+    known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points",
+             "sections", "masses", "rigid_links"}
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
-    mats_d = _table(s, "materials", "")
+    mats_d = _table(s, "materials", "") if "materials" in s else {}
     materials = {str(k): _material(str(k), v) for k, v in mats_d.items()}
     st = _table(s, "structure", "")
     kind = st.get("type", "plate")
+    mesh_d = s.get("mesh")
+    if isinstance(mesh_d, Mapping) and "file" in mesh_d and kind != "mesh":
+        raise ConfigError(f"mesh.file needs structure.type = 'mesh' (got {kind!r}); an "
+                          "imported mesh replaces the built-in plate/beam generator")
+    if kind == "mesh":
+        return _build_mesh(s, st, materials, source)
+    for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
+                     ("rigid_links", "for imported meshes")):
+        if key in s:
+            raise ConfigError(f"{key}: not applicable to structure.type = {kind!r} ({why}, "
+                              "structure.type = 'mesh')")
     if kind == "beam":
         return _build_beam(s, st, materials, source)
     if kind != "plate":
-        raise ConfigError(f"structure.type: expected 'plate' or 'beam', got {kind!r}")
+        raise ConfigError(f"structure.type: expected 'plate', 'beam' or 'mesh', got {kind!r}")
     length, width, ks, layers = _base_section(st, materials)
 
     patches = []
@@ -322,21 +347,26 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         name = p.get("name")
         if not isinstance(name, str) or not name:
             raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
         coords = [_number(p, k, w, positive=False) for k in ("x0", "x1", "y0", "y1")]
         patches.append((Patch(name, *coords), _plies(p.get("layers"), materials, w + "layers")))
 
     mesh = s.get("mesh", {})
     if not isinstance(mesh, Mapping):
         raise ConfigError("mesh: expected a table")
-    unknown = set(mesh) - {"nx", "ny", "element_size"}
-    if unknown:
-        raise ConfigError(f"mesh: unknown keys {sorted(unknown)}; expected nx, ny, element_size")
+    _check_keys(mesh, "mesh", ("nx", "ny", "element_size"),
+                {"n_elements": "for beams; a plate takes nx and ny"})
     for k in ("nx", "ny"):
         if k in mesh and (isinstance(mesh[k], bool) or not isinstance(mesh[k], int)
                           or mesh[k] < 1):
             raise ConfigError(f"mesh.{k}: expected a positive integer, got {mesh[k]!r}")
     if ("nx" in mesh) != ("ny" in mesh) and "element_size" not in mesh:
         raise ConfigError("mesh: give both nx and ny, or element_size")
+    if "element_size" in mesh and ("nx" in mesh or "ny" in mesh):
+        raise ConfigError(
+            "mesh: give either nx and ny or element_size, not both (one of them would be "
+            f"ignored); found keys {sorted(mesh)}"
+        )
     if not mesh:
         raise ConfigError("mesh: missing; give nx and ny, or element_size")
     esize = _number(mesh, "element_size", "mesh.", required=False)
@@ -344,11 +374,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    unknown = set(b) - {"clamp", "clamp_stiffness", "clamp_translational_stiffness", "edges",
-                        "springs"}
-    if unknown:
-        raise ConfigError(f"boundary: unknown keys {sorted(unknown)}; expected clamp, "
-                          "clamp_stiffness, clamp_translational_stiffness, edges, springs")
+    _check_keys(b, "boundary", _PLATE_BOUNDARY_KEYS)
     clamp = b.get("clamp")
     if clamp is not None and clamp not in ("x0", "x1", "y0", "y1"):
         raise ConfigError(f"boundary.clamp: expected one of x0, x1, y0, y1, got {clamp!r}")
@@ -357,33 +383,27 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     edges = b.get("edges", {})
     if not isinstance(edges, Mapping):
         raise ConfigError("boundary.edges: expected a table such as { y0 = 'free' }")
-    springs = []
-    for i, sp_ in enumerate(b.get("springs", [])):
-        w = f"boundary.springs[{i}]."
-        if not isinstance(sp_, Mapping):
-            raise ConfigError(f"boundary.springs[{i}]: expected a table")
-        springs.append(SpringSupport(
-            str(sp_.get("node_set")), str(sp_.get("dof")), _number(sp_, "k", w, positive=False),
-            bool(sp_.get("per_length", False)),
-        ))
-
+    springs = _springs(b, allow_per_length=True)
+    general = _supports(b)
     points = {}
     for i, p in enumerate(s.get("points", [])):
         w = f"points[{i}]."
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"points[{i}]: expected a table with name, x, y")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y"))
         points[p["name"]] = (_number(p, "x", w, positive=False), _number(p, "y", w,
                                                                           positive=False))
     meta = {"structure": s}
     if source is not None:
         meta["source"] = source
     try:
-        return plate_model(
+        model = plate_model(
             length, width, layers, patches=patches, nx=mesh.get("nx"), ny=mesh.get("ny"),
             element_size=esize, supports=dict(edges), clamp=clamp, clamp_stiffness=cs,
             clamp_translational_stiffness=cts, springs=springs, points=points,
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
+        return constrain_model(model, general, ())
     except ConfigError:
         raise
     except MvtkError as err:
@@ -403,6 +423,315 @@ def _base_section(st: Mapping, materials: Mapping) -> tuple[float, float, float,
     return length, width, ks, _plies(st.get("layers"), materials, "structure.layers")
 
 
+_PLATE_BOUNDARY_KEYS = ("clamp", "clamp_stiffness", "clamp_translational_stiffness", "edges",
+                        "springs", "supports")
+_BEAM_BOUNDARY_KEYS = ("clamp", "clamp_stiffness", "clamp_translational_stiffness", "springs",
+                       "supports")
+_SPRING_KEYS = ("node_set", "dof", "k", "per_length")
+
+
+def _check_keys(d: Mapping, where: str, accepted, inapplicable: Mapping[str, str] | None = None
+                ) -> None:
+    """ConfigError naming the first unknown key of ``d`` and the accepted ones."""
+    for key in d:
+        if key in accepted:
+            continue
+        why = (inapplicable or {}).get(key)
+        if why:
+            raise ConfigError(f"{where}.{key}: not applicable here ({why}); accepted keys: "
+                              f"{', '.join(accepted)}")
+        raise ConfigError(f"{where}: unknown key {key!r}; accepted keys: {', '.join(accepted)}")
+
+
+def _springs(b: Mapping, allow_per_length: bool) -> list[SpringSupport]:
+    """``boundary.springs`` entries."""
+    raw = b.get("springs", [])
+    if not isinstance(raw, list):
+        raise ConfigError("boundary.springs: expected a list of tables ([[boundary.springs]])")
+    out = []
+    for i, sp_ in enumerate(raw):
+        w = f"boundary.springs[{i}]"
+        if not isinstance(sp_, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(sp_, w, _SPRING_KEYS if allow_per_length else _SPRING_KEYS[:3],
+                    None if allow_per_length else
+                    {"per_length": "a beam node is a point, not an edge"})
+        for key in ("node_set", "dof"):
+            if not isinstance(sp_.get(key), str):
+                raise ConfigError(f"{w}.{key}: expected a string, got {sp_.get(key)!r}")
+        if sp_["dof"] not in DOF_NAMES:
+            raise ConfigError(f"{w}.dof: {sp_['dof']!r} is not a DOF name; expected one of "
+                              f"{', '.join(DOF_NAMES)}")
+        out.append(SpringSupport(sp_["node_set"], sp_["dof"],
+                                 _number(sp_, "k", w + ".", positive=False),
+                                 bool(sp_.get("per_length", False))))
+    return out
+
+
+def _supports(b: Mapping) -> dict[str, Any]:
+    """``boundary.supports = { node_set = "type" or [DOF names] }``."""
+    sup = b.get("supports", {})
+    if not isinstance(sup, Mapping):
+        raise ConfigError("boundary.supports: expected a table such as "
+                          "{ x0 = 'pinned', x1 = ['uy', 'uz'] }")
+    out = {}
+    for k, v in sup.items():
+        if isinstance(v, str):
+            if v not in GENERAL_SUPPORTS:
+                raise ConfigError(f"boundary.supports.{k}: unknown support type {v!r}; "
+                                  f"expected one of {', '.join(sorted(GENERAL_SUPPORTS))} or "
+                                  "a list of DOF names")
+        elif isinstance(v, list) and all(x in DOF_NAMES for x in v):
+            pass
+        else:
+            raise ConfigError(f"boundary.supports.{k}: expected a support type or a list of "
+                              f"DOF names from {', '.join(DOF_NAMES)}, got {v!r}")
+        out[str(k)] = v
+    return out
+
+
+def constrain_model(model: FEModel, supports: Mapping[str, Any],
+                    springs: Sequence[SpringSupport]) -> FEModel:
+    """Copy of ``model`` with further supports (fixed DOFs) and grounded springs.
+
+    Parameters
+    ----------
+    model : FEModel
+    supports : mapping of node-set name to a support type of
+        :data:`mvtk.fe.GENERAL_SUPPORTS` or a list of DOF names
+    springs : sequence of SpringSupport
+        ``per_length`` is not used here (springs per node).
+    """
+    if not supports and not springs:
+        return model
+    fixed = []
+    for name, kind in supports.items():
+        ns = model.node_set(name)
+        try:
+            fixed.append(support_dofs(model.nodes, ns, kind, f"support {name!r}",
+                                      np.array([0.0, 0.0, 1.0])))
+        except MvtkError as err:
+            raise ConfigError(f"boundary.supports.{name}: {err}") from err
+    key = model.dof_node * 6 + model.dof_component
+    keep = ~np.isin(key, np.concatenate(fixed)) if fixed else np.ones(len(key), bool)
+    sel = np.flatnonzero(keep)
+    K = model.K[sel][:, sel].tocsr()
+    M = model.M[sel][:, sel].tocsr()
+    add = np.zeros(len(sel))
+    lookup = {int(g): i for i, g in enumerate(key[sel])}
+    for set_name, dof, k, _ in springs:
+        for n in model.node_set(set_name):
+            g = int(n) * 6 + DOF_NAMES.index(dof)
+            if g not in lookup:
+                raise ConfigError(f"boundary.springs: DOF {dof} of node {int(n)} (set "
+                                  f"{set_name!r}) is constrained; a spring there does nothing")
+            add[lookup[g]] += k
+    if np.any(add):
+        K = (K + sp.diags(add)).tocsr()
+    meta = dict(model.meta)
+    if meta.get("recovery") is not None:
+        meta["recovery"] = meta["recovery"][:, sel]
+    return replace(model, K=K, M=M, dof_node=model.dof_node[sel],
+                   dof_component=model.dof_component[sel], meta=meta)
+
+
+_SHAPES = {
+    "rectangle": ("width", "height"),
+    "tube": ("outer_radius", "inner_radius"),
+    "i": ("height", "flange_width", "flange_thickness", "web_thickness"),
+    "box": ("height", "width", "web_thickness", "flange_thickness"),
+    "generic": ("A", "Iy", "Iz", "J"),
+}
+
+
+def _vec(d: Mapping, key: str, where: str, default):
+    v = d.get(key, default)
+    if (not isinstance(v, list | tuple) or len(v) != 3
+            or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in v)):
+        raise ConfigError(f"{where}{key}: expected 3 numbers [x, y, z], got {v!r}")
+    return tuple(float(x) for x in v)
+
+
+def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
+    """``[sections.<name>]`` of an imported mesh: shell laminates or beam sections."""
+    from . import _sections as secs
+    from ._meshio import BeamProperty, ShellSection
+
+    raw = s.get("sections")
+    if not isinstance(raw, Mapping) or not raw:
+        raise ConfigError("sections: an imported mesh needs [sections.<name>] tables "
+                          "(shell: layers; beam: shape and material)")
+    out = {}
+    for name, d in raw.items():
+        w = f"sections.{name}."
+        if not isinstance(d, Mapping):
+            raise ConfigError(f"sections.{name}: expected a table")
+        if "layers" in d:
+            _check_keys(d, f"sections.{name}", ("layers", "material_axis", "offset"))
+            lam = Laminate(tuple(_plies(d["layers"], materials, w + "layers")),
+                           shear_correction=ks)
+            out[name] = ShellSection(lam, _vec(d, "material_axis", w, [1.0, 0.0, 0.0]),
+                                     _number(d, "offset", w, positive=False, required=False,
+                                             default=0.0))
+            continue
+        shape = d.get("shape")
+        if shape not in _SHAPES:
+            raise ConfigError(f"sections.{name}: expected layers (shell) or shape (beam: "
+                              f"{', '.join(_SHAPES)}), got shape={shape!r}")
+        dims = _SHAPES[shape]
+        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset")
+                    + dims)
+        mat = d.get("material")
+        if mat not in materials:
+            raise ConfigError(f"{w}material: {mat!r} is not defined; defined materials: "
+                              f"{sorted(materials)}")
+        vals = {k: _number(d, k, w, positive=(k != "inner_radius"),
+                           required=(k != "inner_radius"), default=0.0) for k in dims}
+        try:
+            section = {"rectangle": secs.rectangle_section, "tube": secs.tube_section,
+                       "i": secs.i_section, "box": secs.box_section,
+                       "generic": secs.generic_section}[shape](materials[mat], **vals)
+        except MvtkError as err:
+            raise ConfigError(f"sections.{name}: {err}") from err
+        out[name] = BeamProperty(section, _vec(d, "orientation", w, [0.0, 0.0, 1.0]),
+                                 _vec(d, "offset", w, [0.0, 0.0, 0.0]))
+    return out
+
+
+def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
+    """The ``type = "mesh"`` branch of :func:`build_model` (imported mesh file)."""
+    from ._general import PointMass, RigidLink, Spring
+    from ._meshio import mesh_model, read_mesh
+
+    _check_keys(st, "structure", ("type", "shear_correction"),
+                {k: "the geometry comes from mesh.file" for k in ("length", "width",
+                                                                   "layers")})
+    ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
+    if "patches" in s:
+        raise ConfigError("patches: not applicable to an imported mesh; map the patch's "
+                          "element set to its own section in mesh.sections")
+    mesh_d = s.get("mesh")
+    if not isinstance(mesh_d, Mapping) or "file" not in mesh_d:
+        raise ConfigError("mesh.file: an imported structure needs [mesh] file = 'part.msh'")
+    path = Path(str(mesh_d["file"]))
+    if not path.is_absolute() and source is not None:
+        path = Path(source).parent / path
+    if path.suffix.lower() in (".bdf", ".dat", ".nas"):
+        return _build_nastran(s, mesh_d, path, source)
+    _check_keys(mesh_d, "mesh", ("file", "sections"),
+                {k: "the mesh comes from mesh.file" for k in ("nx", "ny", "element_size",
+                                                              "n_elements")})
+    sections = _mesh_sections(s, materials, ks)
+    mapping = mesh_d.get("sections")
+    if not isinstance(mapping, Mapping) or not mapping:
+        raise ConfigError("mesh.sections: expected a table { <element set> = '<section>' }")
+    for k, v in mapping.items():
+        if v not in sections:
+            raise ConfigError(f"mesh.sections.{k}: section {v!r} is not defined; defined "
+                              f"sections: {sorted(sections)}")
+    try:
+        mesh = read_mesh(path)
+    except MvtkError as err:
+        raise ConfigError(f"mesh.file: {err}") from err
+    node_sets = dict(mesh.node_sets)
+    for i, p in enumerate(s.get("points", [])):
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name, x, y, z")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y", "z"))
+        xyz = np.array([_number(p, k, f"points[{i}].", positive=False) for k in "xyz"])
+        if p["name"] in node_sets:
+            raise ConfigError(f"points[{i}].name: {p['name']!r} is already a set of the mesh")
+        node_sets[p["name"]] = np.array([int(np.argmin(np.linalg.norm(mesh.nodes - xyz,
+                                                                      axis=1)))])
+
+    def one_node(name: Any, where: str) -> int:
+        if name not in node_sets or len(node_sets[name]) != 1:
+            raise ConfigError(f"{where}: expected the name of a point or a one-node set, got "
+                              f"{name!r}")
+        return int(node_sets[name][0])
+
+    members: list[Any] = []
+    for i, m in enumerate(s.get("masses", [])):
+        w = f"masses[{i}]"
+        if not isinstance(m, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(m, w, ("point", "mass", "inertia", "offset"))
+        members.append(PointMass(one_node(m.get("point"), w + ".point"),
+                                 _number(m, "mass", w + ".", positive=False),
+                                 _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0]),
+                                 _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])))
+    for i, r in enumerate(s.get("rigid_links", [])):
+        w = f"rigid_links[{i}]"
+        if not isinstance(r, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(r, w, ("independent", "nodes", "kind", "dofs"))
+        if r.get("nodes") not in node_sets:
+            raise ConfigError(f"{w}.nodes: expected a node set, got {r.get('nodes')!r}; "
+                              f"available: {sorted(node_sets)}")
+        ind = one_node(r.get("independent"), w + ".independent")
+        dep = [n for n in node_sets[r["nodes"]] if n != ind]
+        members.append(RigidLink(ind, dep, str(r.get("kind", "rbe2")),
+                                 tuple(r.get("dofs", DOF_NAMES))))
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", ("supports", "springs"),
+                {k: "for the built-in plate/beam; use boundary.supports on a node set"
+                 for k in ("clamp", "clamp_stiffness", "clamp_translational_stiffness",
+                           "edges")})
+    for sp_ in _springs(b, allow_per_length=False):
+        set_name, dof, kval, _ = sp_
+        if set_name not in node_sets:
+            raise ConfigError(f"boundary.springs: node set {set_name!r} not found; "
+                              f"available: {sorted(node_sets)}")
+        members += [Spring(int(n), {dof: kval}) for n in node_sets[set_name]]
+    meta = {"structure": s}
+    if source is not None:
+        meta["source"] = source
+    try:
+        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                          members=members, supports=_supports(b), node_sets=node_sets,
+                          name=str(s.get("name", "")), meta=meta)
+    except MvtkError as err:
+        raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
+            from err
+
+
+def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:
+    """``[mesh] file = "deck.bdf"``: the whole model (sections included) from the deck."""
+    from ._nastran import read_nastran
+
+    _check_keys(mesh_d, "mesh", ("file", "spc_id"),
+                {"sections": "a Nastran deck carries its own properties"})
+    for key in ("sections", "masses", "rigid_links"):
+        if key in s:
+            raise ConfigError(f"{key}: not applicable to a Nastran deck (it carries its own "
+                              "properties, CONM2 and RBE2 cards)")
+    spc = mesh_d.get("spc_id")
+    if spc is not None and (isinstance(spc, bool) or not isinstance(spc, int)):
+        raise ConfigError(f"mesh.spc_id: expected an integer SPC1 set id, got {spc!r}")
+    b = s.get("boundary", {})
+    if not isinstance(b, Mapping):
+        raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", ("supports", "springs"))
+    try:
+        model = read_nastran(path, spc_id=spc, name=str(s.get("name", "")))
+    except MvtkError as err:
+        raise ConfigError(f"mesh.file: {err}") from err
+    sets = dict(model.node_sets)
+    for i, p in enumerate(s.get("points", [])):
+        if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
+            raise ConfigError(f"points[{i}]: expected a table with name, x, y, z")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y", "z"))
+        xyz = np.array([_number(p, k, f"points[{i}].", positive=False) for k in "xyz"])
+        sets[p["name"]] = np.array([model.nearest_node(xyz)])
+    meta = dict(model.meta, structure=s)
+    if source is not None:
+        meta["source"] = source
+    model = replace(model, node_sets=sets, meta=meta)
+    return constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+
+
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
     """The ``type = "beam"`` branch of :func:`build_model`."""
     from ._beam import BeamPatch, cantilever_beam
@@ -413,6 +742,7 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"patches[{i}]."
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"patches[{i}]: expected a table with a name")
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
         x0 = _number(p, "x0", w, positive=False)
         x1 = _number(p, "x1", w, positive=False)
         pw = None
@@ -426,33 +756,57 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     mesh = s.get("mesh", {})
     if not isinstance(mesh, Mapping):
         raise ConfigError("mesh: expected a table")
-    n_el = mesh.get("n_elements", mesh.get("nx", 40))
+    _check_keys(mesh, "mesh", ("n_elements", "nx", "element_size"),
+                {"ny": "a beam has no elements across its width", "file": "an imported "
+                 "mesh is a structure of its own: drop structure.type"})
+    given = [k for k in ("n_elements", "nx", "element_size") if k in mesh]
+    if len(given) > 1:
+        raise ConfigError(f"mesh: give one of n_elements, nx or element_size, not {given} "
+                          "(the others would be ignored)")
+    if "element_size" in mesh:
+        size = _number(mesh, "element_size", "mesh.")
+        n_el = max(1, int(np.ceil(length / size - 1e-9)))
+    else:
+        n_el = mesh.get("n_elements", mesh.get("nx", 40))
     if isinstance(n_el, bool) or not isinstance(n_el, int) or n_el < 1:
-        raise ConfigError(f"mesh.n_elements: expected a positive integer, got {n_el!r}")
+        raise ConfigError(f"mesh.{given[0] if given else 'n_elements'}: expected a positive "
+                          f"integer, got {n_el!r}")
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
+    _check_keys(b, "boundary", _BEAM_BOUNDARY_KEYS,
+                {"edges": "a beam has no edges; use boundary.supports = { x0 = 'pinned' }"})
     clamp = b.get("clamp", "x0")
     if clamp not in ("x0", "x1", "free"):
         raise ConfigError(f"boundary.clamp: expected x0, x1 or free for a beam, got {clamp!r}")
     cs = _number(b, "clamp_stiffness", "boundary.", required=False)
     cts = _number(b, "clamp_translational_stiffness", "boundary.", required=False)
+    springs = _springs(b, allow_per_length=False)
+    general = _supports(b)
     points = {}
     for i, p in enumerate(s.get("points", [])):
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
             raise ConfigError(f"points[{i}]: expected a table with name and x")
+        _check_keys(p, f"points[{i}]", ("name", "x", "y"))
+        if "y" in p:
+            y = _number(p, "y", f"points[{i}].", positive=False)
+            if not 0 <= y <= width:
+                raise ConfigError(f"points[{i}].y: {y} m is outside the beam width 0..{width}")
         points[p["name"]] = _number(p, "x", f"points[{i}].", positive=False)
     meta = {"structure": s}
     if source is not None:
         meta["source"] = source
     try:
-        return cantilever_beam(
+        model = cantilever_beam(
             length, width, layers, n_elements=n_el, patches=patches,
             clamp=None if clamp == "free" else clamp,
             clamp_stiffness=None if cs is None else cs * width,
             clamp_translational_stiffness=None if cts is None else cts * width,
             points=points, shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
+        return constrain_model(model, general, springs)
+    except ConfigError:
+        raise
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err

@@ -114,3 +114,31 @@ def test_spring_at_tip_of_free_strip_closed_form():
     with pytest.raises(ParameterError, match="spring node set 'nope'"):
         plate_model(0.2, 0.02, [Ply(STEEL, 1e-3)], nx=4, ny=2,
                     springs=[SpringSupport("nope", "uz", 1.0)])
+
+
+def test_size_estimate_matches_a_small_model_and_huge_meshes_are_refused_at_once():
+    """Issue 16: element_size = 1e-5 on a small plate ran out of memory after minutes."""
+    import time
+    import tracemalloc
+
+    from mvtk.fe import IsotropicMaterial, Ply, plate_model
+    from mvtk.fe._mesh import estimate_plate_size
+
+    steel = IsotropicMaterial("steel", 210e9, 0.3, 7850.0)
+    est = estimate_plate_size(0.3, 0.2, element_size=0.01)
+    tracemalloc.start()
+    model = plate_model(0.3, 0.2, [Ply(steel, 1e-3)], element_size=0.01)
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert (est.n_nodes, est.n_elements, est.n_dof) == (model.n_nodes, model.n_elements,
+                                                        model.n_dof)
+    assert est.nnz == model.K.nnz
+    assert 0.5 < est.bytes / peak < 2.0
+    t0 = time.perf_counter()
+    with pytest.raises(ParameterError, match=r"200030001 nodes, 200000000 elements and "
+                       r"1200180006 DOFs .*element_size=1e-05.*estimated assembly memory "
+                       r"1.26e\+04 GB exceeds the limit 1 GB"):
+        rectangular_plate_mesh(0.2, 0.1, element_size=1e-5, max_bytes=10**9)
+    with pytest.raises(ParameterError, match="exceeds the limit"):
+        plate_model(0.2, 0.1, [Ply(steel, 1e-3)], element_size=1e-5)
+    assert time.perf_counter() - t0 < 1.0

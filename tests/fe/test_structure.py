@@ -68,7 +68,8 @@ def test_build_is_deterministic_and_perturbable():
     s5 = set_by_path(s, "boundary.clamp_stiffness", 10.0, create=True)
     assert modal_analysis(build_model(s5), 1).fn_hz[0] == pytest.approx(
         modal_analysis(build_model(s4), 1).fn_hz[0], rel=1e-12)
-    with pytest.raises(ConfigError, match=r"boundary: unknown keys \['clamp_stifness'\]"):
+    with pytest.raises(ConfigError, match=r"boundary: unknown key 'clamp_stifness'; "
+                       r"accepted keys: clamp, clamp_stiffness"):
         build_model(set_by_path(s, "boundary.clamp_stifness", 10.0, create=True))
 
 
@@ -190,3 +191,86 @@ def test_mode_labels_without_mirror_symmetric_mesh():
     s = set_by_path(set_by_path(s, "patches.0.y0", 0.01), "patches.0.y1", 0.04)
     res = modal_analysis(build_model(s), 2)
     assert res.mode_type == ("bending", "torsion")
+
+
+def _beam() -> dict:
+    s = _strip()
+    s["structure"]["type"] = "beam"
+    s["mesh"] = {"n_elements": 40}
+    s["points"] = [{"name": "tip", "x": 0.2}]
+    return s
+
+
+@pytest.mark.parametrize("path, value, message", [
+    ("boundary.edges", {"x1": "free"}, r"boundary.edges: not applicable here \(a beam has "
+     r"no edges; use boundary.supports"),
+    ("boundary.clamp_stifness", 1.0, r"boundary: unknown key 'clamp_stifness'; accepted keys:"
+     r" clamp, clamp_stiffness, clamp_translational_stiffness, springs, supports"),
+    ("mesh.ny", 4, r"mesh.ny: not applicable here \(a beam has no elements across"),
+    ("mesh.element_size", 0.01, r"mesh: give one of n_elements, nx or element_size, not "
+     r"\['n_elements', 'element_size'\]"),
+    ("boundary.springs", [{"node_set": "tip", "dof": "uz", "k": 1.0, "per_length": True}],
+     r"boundary.springs\[0\].per_length: not applicable here"),
+    ("boundary.supports", {"x1": "glued"}, r"boundary.supports.x1: unknown support type "
+     r"'glued'; expected one of antisymmetry_x"),
+    ("points.0.z", 1.0, r"points\[0\]: unknown key 'z'; accepted keys: name, x, y"),
+])
+def test_beam_refuses_unknown_and_inapplicable_keys(path, value, message):
+    """Issue 16: beam models silently ignored boundary.edges/springs and mesh keys."""
+    with pytest.raises(ConfigError, match=message):
+        build_model(set_by_path(_beam(), path, value, create=True))
+
+
+def test_plate_refuses_nx_ny_together_with_element_size():
+    s = set_by_path(_strip(), "mesh.element_size", 0.01, create=True)
+    with pytest.raises(ConfigError, match=r"mesh: give either nx and ny or element_size, not "
+                       r"both \(one of them would be ignored\)"):
+        build_model(s)
+
+
+def test_simply_supported_beam_and_springs_now_expressible():
+    s = _beam()
+    s["boundary"] = {"clamp": "free",
+                     "supports": {"x0": ["ux", "uy", "uz", "rx"], "x1": ["uy", "uz"]}}
+    res = modal_analysis(build_model(s), 3)
+    E, rho, L, b, h = 210e9, 7900.0, 0.2, 0.02, 1e-3
+    ref = np.pi / (2 * L**2) * np.sqrt(E * b * h**3 / 12 / (rho * b * h))
+    assert res.fn_hz[0] == pytest.approx(ref, rel=2e-3)
+    assert res.mode_type[0] == "bending"
+    # element_size now sets the beam mesh; springs act
+    s2 = set_by_path(s, "mesh", {"element_size": 0.005})
+    assert build_model(s2).meta["structure"]["mesh"] == {"element_size": 0.005}
+    assert len(build_model(s2).nodes) == 41
+    s3 = set_by_path(s, "boundary.springs", [{"node_set": "mid", "dof": "uz", "k": 1e3}],
+                     create=True)
+    s3["points"].append({"name": "mid", "x": 0.1})
+    assert modal_analysis(build_model(s3), 1).fn_hz[0] > res.fn_hz[0] * 1.01
+
+
+def test_plate_supports_on_node_sets():
+    s = _strip()
+    s["boundary"] = {"supports": {"x0": "simply_supported_hard", "x1": "pinned"}}
+    res = modal_analysis(build_model(s), 1)
+    E, rho, L, h = 210e9, 7900.0, 0.2, 1e-3
+    ref = np.pi / (2 * L**2) * np.sqrt(E * h**2 / 12 / rho)  # narrow strip: a beam
+    assert res.fn_hz[0] == pytest.approx(ref, rel=0.01)
+
+
+def test_free_free_beam_reports_six_rigid_modes_sorted_at_zero():
+    """Issue 16: -n 6 on a free-free beam gave unsorted fn and rigid modes 'in-plane'."""
+    s = load_structure(DATA / "smart_beam_beam.toml")
+    s["boundary"]["clamp"] = "free"
+    model = build_model(s)
+    res = modal_analysis(model, 6)
+    assert res.mode_type == ("rigid",) * 6 and np.all(res.fn_hz == 0.0)
+    res9 = modal_analysis(model, 9)
+    assert res9.mode_type[:6] == ("rigid",) * 6
+    assert np.all(np.diff(res9.fn_hz) >= 0) and res9.fn_hz[6] > 10.0
+
+
+def test_mode_labels_are_deterministic_across_runs_and_mode_counts():
+    """Issue 12: a torsion mode was labelled 'torsion' or 'in-plane' at random."""
+    model = build_model(DATA / "smart_beam_beam.toml")
+    runs = [modal_analysis(model, n).mode_type[:6] for n in (6, 8, 6, 10)]
+    assert all(r == runs[0] for r in runs)
+    assert runs[0][:2] == ("bending", "torsion")

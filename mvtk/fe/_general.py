@@ -1,0 +1,659 @@
+"""General 3-D models: shells, beams, point masses, springs, rigid links, supports.
+
+:func:`assemble_model` turns a node table and a list of *members* into an
+:class:`~mvtk.fe.FEModel`:
+
+- :class:`ShellSet`: MITC4 quadrilaterals or MITC3 triangles at any orientation
+  (:mod:`mvtk.fe._shell3d`), one laminate per set, ply angles from a material axis,
+  optional offset of the laminate from the node surface;
+- :class:`BeamSet`: 3-D Timoshenko beams (:func:`mvtk.fe.timoshenko_element_matrices`)
+  with an orientation vector (the section's local y) and an offset of the beam axis
+  from the nodes (stiffeners on shells);
+- :class:`PointMass`: mass and rotary inertia, optionally offset from its node;
+- :class:`Spring`: grounded (one node) or two-node springs, 6x6 or per DOF;
+- :class:`RigidLink`: RBE2-like rigid bodies and RBE3-like interpolation.
+
+Constraints are imposed by **elimination**: the full displacement vector is
+``u = T q`` with ``q`` the independent, unsupported DOFs; ``K = T' K_full T`` and
+``M = T' M_full T`` stay symmetric and sparse. Supports remove DOFs (columns of ``T``);
+rigid links express dependent DOFs through independent ones (rows of ``T``).
+DOFs that carry neither stiffness nor mass after that (nodes of no member, rotations of
+nodes reached only by RBE3 or springs) are removed too and listed in
+``meta["unused_dofs"]``.
+
+Support types (:data:`GENERAL_SUPPORTS`), on any node set; rotations are about global
+axes:
+
+=======================  ====================================================
+``clamped``              ux uy uz rx ry rz
+``pinned``               ux uy uz
+``simply_supported_soft``  ux uy uz (alias ``simply_supported``: see ``_hard``)
+``simply_supported_hard``  ux uy uz and the rotation about the in-plane normal of
+                         the edge (the *twist* of the edge, which a hard simple
+                         support prevents); needs a straight node line whose
+                         in-plane normal (edge direction x shell normal) is a
+                         global axis
+``roller_x|y|z``         the translation along that global axis
+``symmetry_x|y|z``       symmetry about the plane normal to that axis:
+                         the translation along it and the two rotations about
+                         the other axes (e.g. symmetry_x: ux ry rz)
+``antisymmetry_x|y|z``   the two in-plane translations and the rotation about
+                         the axis (e.g. antisymmetry_x: uy uz rx)
+``free``                 nothing
+list of DOF names        those components, e.g. ``["uz", "rx"]``
+=======================  ====================================================
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import DimensionError, ParameterError
+from ._assembly import assemble_element_matrices
+from ._beam import BeamSection, _global_matrices, _section_array
+from ._laminate import Laminate
+from ._model import DOF_NAMES, FEModel
+from ._shell import DRILL_FACTOR
+from ._shell3d import shell_element_matrices, shell_frames
+
+__all__ = [
+    "GENERAL_SUPPORTS",
+    "ShellSet",
+    "BeamSet",
+    "PointMass",
+    "Spring",
+    "RigidLink",
+    "assemble_model",
+    "support_dofs",
+]
+
+_CHUNK = 8192  # shell elements per assembly chunk
+
+GENERAL_SUPPORTS: dict[str, tuple[str, ...]] = {
+    "clamped": ("ux", "uy", "uz", "rx", "ry", "rz"),
+    "pinned": ("ux", "uy", "uz"),
+    "simply_supported_soft": ("ux", "uy", "uz"),
+    "simply_supported_hard": ("ux", "uy", "uz", "twist"),
+    "simply_supported": ("ux", "uy", "uz", "twist"),
+    "hinged": ("ux", "uy", "uz"),
+    "roller_x": ("ux",),
+    "roller_y": ("uy",),
+    "roller_z": ("uz",),
+    "symmetry_x": ("ux", "ry", "rz"),
+    "symmetry_y": ("uy", "rx", "rz"),
+    "symmetry_z": ("uz", "rx", "ry"),
+    "antisymmetry_x": ("uy", "uz", "rx"),
+    "antisymmetry_y": ("ux", "uz", "ry"),
+    "antisymmetry_z": ("ux", "uy", "rz"),
+    "free": (),
+}
+
+
+def _cross_matrix(r: np.ndarray) -> np.ndarray:
+    """[r]x with [r]x v = r x v; r (..., 3) -> (..., 3, 3)."""
+    r = np.asarray(r, dtype=float)
+    out = np.zeros(r.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2] = -r[..., 2], r[..., 1]
+    out[..., 1, 0], out[..., 1, 2] = r[..., 2], -r[..., 0]
+    out[..., 2, 0], out[..., 2, 1] = -r[..., 1], r[..., 0]
+    return out
+
+
+def _offset_matrix(e: np.ndarray) -> np.ndarray:
+    """6x6 map from node DOFs to those of a point rigidly offset by e (..., 3)."""
+    e = np.asarray(e, dtype=float)
+    W = np.zeros(e.shape[:-1] + (6, 6))
+    W[..., :3, :3] = np.eye(3)
+    W[..., 3:, 3:] = np.eye(3)
+    W[..., :3, 3:] = -_cross_matrix(e)  # u_p = u + theta x e = u - [e]x theta
+    return W
+
+
+def _vector3(v, where: str) -> np.ndarray:
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,) or not np.all(np.isfinite(a)):
+        raise ParameterError(f"{where}: expected 3 finite numbers, got {v!r}")
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class ShellSet:
+    """Shell elements sharing one section.
+
+    Parameters
+    ----------
+    elements : array_like of int, shape (n_el, 3) or (n_el, 4)
+        Node indices: triangles (MITC3) or quadrilaterals (MITC4), counter-clockwise about
+        the intended normal.
+    section : Laminate
+        Layers bottom (-normal side) to top; ply angles from the material axis.
+    material_axis : array_like (3,) or (n_el, 3)
+        Global direction whose projection on each element is the ply reference
+        direction ``e1`` (default global x), or one direction per element.
+    offset : float
+        Distance (m) from the node surface to the laminate mid-plane along the element
+        normal (e.g. ``+t/2`` puts the nodes on the bottom face).
+    name : str
+        Element set name.
+    """
+
+    elements: np.ndarray
+    section: Laminate
+    material_axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    offset: float = 0.0
+    name: str = "shell"
+
+    def __post_init__(self) -> None:
+        el = np.asarray(self.elements, dtype=np.int64)
+        if el.ndim != 2 or el.shape[1] not in (3, 4):
+            raise DimensionError(
+                f"shell set {self.name!r}: elements must have shape (n, 3) or (n, 4), "
+                f"got {el.shape}"
+            )
+        if not isinstance(self.section, Laminate):
+            raise ParameterError(f"shell set {self.name!r}: section must be a Laminate")
+        if not np.isfinite(self.offset):
+            raise ParameterError(f"shell set {self.name!r}: offset must be finite")
+        object.__setattr__(self, "elements", el)
+        axis = np.asarray(self.material_axis, dtype=float)
+        if axis.ndim == 2:
+            if axis.shape != (len(el), 3) or not np.all(np.isfinite(axis)):
+                raise ParameterError(
+                    f"shell set {self.name!r}: material_axis must be 3 numbers or finite "
+                    f"({len(el)}, 3) per element, got shape {axis.shape}")
+            object.__setattr__(self, "material_axis", axis)
+        else:
+            object.__setattr__(self, "material_axis", tuple(
+                _vector3(self.material_axis, f"shell set {self.name!r}")))
+
+    def laminate(self) -> Laminate:
+        """The section with the offset applied (reference surface = node surface)."""
+        lam = self.section
+        if self.offset == 0.0:
+            return lam
+        zb = (-lam.thickness / 2 if lam.z_bottom is None else lam.z_bottom) + self.offset
+        return Laminate(lam.plies, z_bottom=zb, shear_correction=lam.shear_correction)
+
+
+@dataclass(frozen=True, eq=False)
+class BeamSet:
+    """Two-node Timoshenko beam elements sharing one section.
+
+    Parameters
+    ----------
+    elements : array_like of int, shape (n_el, 2)
+    section : BeamSection
+        See :func:`mvtk.fe.beam_section` and :mod:`mvtk.fe._sections`.
+    orientation : array_like (3,)
+        Vector in the local x-y plane: the section's width axis (local y) is its part
+        normal to the beam axis (as Nastran's CBAR orientation vector).
+    offset : array_like (3,)
+        Global vector (m) from each node to the beam axis (e.g. a stiffener's
+        centroid below the shell nodes); the axis is tied rigidly to the nodes.
+    name : str
+    """
+
+    elements: np.ndarray
+    section: BeamSection
+    orientation: tuple[float, float, float] = (0.0, 1.0, 0.0)
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    name: str = "beam"
+
+    def __post_init__(self) -> None:
+        el = np.asarray(self.elements, dtype=np.int64)
+        if el.ndim != 2 or el.shape[1] != 2:
+            raise DimensionError(
+                f"beam set {self.name!r}: elements must have shape (n, 2), got {el.shape}"
+            )
+        if not isinstance(self.section, BeamSection):
+            raise ParameterError(f"beam set {self.name!r}: section must be a BeamSection")
+        object.__setattr__(self, "elements", el)
+        object.__setattr__(self, "orientation",
+                           tuple(_vector3(self.orientation, f"beam set {self.name!r}")))
+        object.__setattr__(self, "offset",
+                           tuple(_vector3(self.offset, f"beam set {self.name!r}")))
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A rigid mass attached to a node.
+
+    Parameters
+    ----------
+    node : int
+    mass : float
+        kg.
+    inertia : array_like, (3,) or (3, 3)
+        Rotary inertia about the mass centre in global axes (kg m^2); a (3,) value is
+        the diagonal.
+    offset : array_like (3,)
+        Vector from the node to the mass centre (m).
+    """
+
+    node: int
+    mass: float
+    inertia: Any = (0.0, 0.0, 0.0)
+    offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def matrix(self) -> np.ndarray:
+        """6x6 mass matrix at the node (global DOFs)."""
+        if not (np.isfinite(self.mass) and self.mass >= 0):
+            raise ParameterError(f"point mass at node {self.node}: mass must be >= 0")
+        J = np.asarray(self.inertia, dtype=float)
+        if J.shape == (3,):
+            J = np.diag(J)
+        if J.shape != (3, 3) or not np.allclose(J, J.T) or np.any(np.linalg.eigvalsh(J) < 0):
+            raise ParameterError(
+                f"point mass at node {self.node}: inertia must be 3 values or a symmetric "
+                f"positive semi-definite 3x3 matrix, got {self.inertia!r}"
+            )
+        m = np.zeros((6, 6))
+        m[:3, :3] = self.mass * np.eye(3)
+        m[3:, 3:] = J
+        W = _offset_matrix(_vector3(self.offset, f"point mass at node {self.node}"))
+        return W.T @ m @ W
+
+
+def _spring_matrix(k: Any, where: str) -> np.ndarray:
+    if isinstance(k, Mapping):
+        out = np.zeros((6, 6))
+        for name, v in k.items():
+            if name not in DOF_NAMES:
+                raise ParameterError(f"{where}: unknown DOF {name!r}; expected {DOF_NAMES}")
+            if not (np.isfinite(v) and v >= 0):
+                raise ParameterError(f"{where}: stiffness of {name} must be >= 0, got {v!r}")
+            out[DOF_NAMES.index(name), DOF_NAMES.index(name)] = float(v)
+        return out
+    a = np.asarray(k, dtype=float)
+    if a.shape == (6,):
+        a = np.diag(a)
+    if a.shape != (6, 6) or not np.allclose(a, a.T) or np.any(np.linalg.eigvalsh(a) < -1e-12
+                                                              * np.abs(a).max()):
+        raise ParameterError(
+            f"{where}: k must be a dict of DOF stiffnesses, 6 values or a symmetric positive "
+            "semi-definite 6x6 matrix"
+        )
+    return a
+
+
+@dataclass(frozen=True)
+class Spring:
+    """A grounded (``node_b=None``) or two-node spring.
+
+    Parameters
+    ----------
+    node_a : int
+    k : dict, (6,) or (6, 6)
+        ``{"uz": 1e4}`` (N/m, N m/rad), a diagonal, or a full symmetric 6x6 matrix in
+        global axes.
+    node_b : int, optional
+        Second node; the spring acts on the relative displacement ``u_b - u_a``.
+    """
+
+    node_a: int
+    k: Any
+    node_b: int | None = None
+
+    def matrix(self) -> np.ndarray:
+        """6x6 (grounded) or 12x12 stiffness."""
+        k6 = _spring_matrix(self.k, f"spring at node {self.node_a}")
+        if self.node_b is None:
+            return k6
+        return np.block([[k6, -k6], [-k6, k6]])
+
+
+@dataclass(frozen=True)
+class RigidLink:
+    """A rigid body (RBE2-like) or a weighted interpolation (RBE3-like).
+
+    Parameters
+    ----------
+    independent : int
+        ``"rbe2"``: the independent (master) node. ``"rbe3"``: the *reference* node,
+        whose 6 DOFs become dependent.
+    nodes : sequence of int
+        ``"rbe2"``: the dependent nodes, whose components ``dofs`` follow the rigid
+        motion ``u = u_m + theta_m x (x - x_m)``, ``theta = theta_m``. ``"rbe3"``: the
+        independent nodes whose translations define the reference motion.
+    kind : {"rbe2", "rbe3"}
+    dofs : sequence of str
+        RBE2 dependent components (default all six).
+    weights : sequence of float, optional
+        RBE3 weights (default 1): the reference translation and rotation are the
+        weighted least-squares rigid motion ``(S' W S)^-1 S' W u`` fitted to the
+        translations ``u`` of ``nodes`` (``S_j = [I, -[x_j - x_ref]x]``). This keeps the
+        stiffness of the structure (no added stiffness) and carries forces and moments
+        applied at the reference node to the nodes, as Nastran's RBE3 with translational
+        components (123) at the independent nodes.
+    """
+
+    independent: int
+    nodes: Sequence[int]
+    kind: str = "rbe2"
+    dofs: Sequence[str] = DOF_NAMES
+    weights: Sequence[float] | None = None
+
+
+def _support_components(kind: Any, where: str) -> list[str]:
+    if isinstance(kind, str):
+        if kind not in GENERAL_SUPPORTS:
+            raise ParameterError(
+                f"{where}: unknown support type {kind!r}; expected one of "
+                f"{sorted(GENERAL_SUPPORTS)} or a list of DOF names {list(DOF_NAMES)}"
+            )
+        return list(GENERAL_SUPPORTS[kind])
+    if isinstance(kind, Sequence):
+        names = [str(k) for k in kind]
+        for n in names:
+            if n not in DOF_NAMES:
+                raise ParameterError(
+                    f"{where}: unknown DOF name {n!r}; expected names from {list(DOF_NAMES)}"
+                )
+        return names
+    raise ParameterError(f"{where}: support must be a type name or a list of DOF names, "
+                         f"got {kind!r}")
+
+
+def support_dofs(nodes: np.ndarray, node_set: np.ndarray, kind: Any, where: str = "support",
+                 normal: np.ndarray | None = None) -> np.ndarray:
+    """Global DOF indices ``node * 6 + component`` fixed by a support on a node set.
+
+    Parameters
+    ----------
+    nodes : ndarray (n_nodes, 3)
+        All node coordinates (m).
+    node_set : ndarray of int
+    kind : str or list of str
+        See :data:`GENERAL_SUPPORTS`.
+    where : str
+        Name used in error messages.
+    normal : ndarray (3,), optional
+        Shell normal at the set (needed by ``simply_supported_hard``).
+    """
+    node_set = np.asarray(node_set, dtype=np.int64)
+    comps = []
+    for name in _support_components(kind, where):
+        if name != "twist":
+            comps.append(DOF_NAMES.index(name))
+            continue
+        pts = nodes[node_set]
+        if len(pts) < 2 or normal is None:
+            raise ParameterError(
+                f"{where}: a hard simple support needs a line of >= 2 shell nodes; use "
+                "an explicit DOF list instead"
+            )
+        _, s, vt = np.linalg.svd(pts - pts.mean(axis=0))
+        if s.size > 1 and s[1] > 1e-6 * s[0]:
+            raise ParameterError(f"{where}: a hard simple support needs a straight node "
+                                 "line; give an explicit DOF list for curved edges")
+        axis = np.cross(vt[0], normal)
+        axis /= np.linalg.norm(axis)
+        k = int(np.argmax(np.abs(axis)))
+        if abs(abs(axis[k]) - 1) > 1e-6:
+            raise ParameterError(
+                f"{where}: the edge's in-plane normal {np.round(axis, 4).tolist()} is not a "
+                "global axis; give an explicit DOF list"
+            )
+        comps.append(3 + k)
+    comps = np.unique(np.asarray(comps, dtype=np.int64))
+    return (node_set[:, None] * 6 + comps[None, :]).ravel()
+
+
+def _rigid_rows(xm: np.ndarray, xd: np.ndarray) -> np.ndarray:
+    """6x6 map from master DOFs to the rigid-body DOFs at point xd."""
+    return _offset_matrix(xd - xm)
+
+
+def _constraint_matrix(nodes: np.ndarray, links: Sequence[RigidLink]) -> tuple[
+        sp.csr_matrix, np.ndarray]:
+    """``C`` with ``u = C u`` expressing dependent DOFs, and the dependent mask."""
+    n_all = len(nodes) * 6
+    dependent = np.zeros(n_all, dtype=bool)
+    rows, cols, vals = [np.arange(n_all)], [np.arange(n_all)], [np.ones(n_all)]
+    for i, link in enumerate(links):
+        where = f"rigid link {i} ({link.kind})"
+        m = int(link.independent)
+        dep = np.asarray(list(link.nodes), dtype=np.int64)
+        if dep.size == 0:
+            raise ParameterError(f"{where}: no nodes given")
+        if m < 0 or m >= len(nodes) or dep.min() < 0 or dep.max() >= len(nodes):
+            raise ParameterError(f"{where}: node index outside 0..{len(nodes) - 1}")
+        if m in dep:
+            raise ParameterError(f"{where}: node {m} is both independent and dependent")
+        if link.kind == "rbe2":
+            comps = [DOF_NAMES.index(c) if c in DOF_NAMES else -1 for c in link.dofs]
+            if -1 in comps or not comps:
+                raise ParameterError(f"{where}: dofs must be names from {list(DOF_NAMES)}, "
+                                     f"got {list(link.dofs)}")
+            for d in dep:
+                W = _rigid_rows(nodes[m], nodes[d])
+                for c in comps:
+                    g = 6 * d + c
+                    if dependent[g]:
+                        raise ParameterError(f"{where}: DOF {DOF_NAMES[c]} of node {d} is "
+                                             "already dependent in another link")
+                    dependent[g] = True
+                    nz = np.flatnonzero(W[c])
+                    rows.append(np.full(len(nz), g))
+                    cols.append(6 * m + nz)
+                    vals.append(W[c, nz])
+        elif link.kind == "rbe3":
+            w = np.ones(len(dep)) if link.weights is None else np.asarray(link.weights, float)
+            if w.shape != dep.shape or np.any(w <= 0):
+                raise ParameterError(f"{where}: expected {len(dep)} positive weights")
+            S = np.zeros((3 * len(dep), 6))
+            for j, d in enumerate(dep):
+                S[3 * j:3 * j + 3] = _offset_matrix(nodes[d] - nodes[m])[:3]
+            Wd = np.repeat(w, 3)
+            A = S.T @ (Wd[:, None] * S)
+            if np.linalg.cond(A) > 1e12:
+                raise ParameterError(
+                    f"{where}: the nodes {dep.tolist()} do not define a rigid motion "
+                    "(collinear or fewer than 3 nodes); use rbe2 or add nodes"
+                )
+            G = np.linalg.solve(A, S.T * Wd[None, :])  # (6, 3 n)
+            tcols = (6 * dep[:, None] + np.arange(3)[None, :]).ravel()
+            for c in range(6):
+                g = 6 * m + c
+                if dependent[g]:
+                    raise ParameterError(f"{where}: reference node {m} is already dependent")
+                dependent[g] = True
+                rows.append(np.full(len(tcols), g))
+                cols.append(tcols)
+                vals.append(G[c])
+        else:
+            raise ParameterError(f"{where}: kind must be 'rbe2' or 'rbe3', got {link.kind!r}")
+    r = np.concatenate(rows)
+    c = np.concatenate(cols)
+    v = np.concatenate(vals)
+    keep = ~dependent[r] | (r != c)  # dependent rows lose their identity entry
+    C = sp.csr_matrix((v[keep], (r[keep], c[keep])), shape=(n_all, n_all))
+    # resolve chains (a dependent DOF used as an independent one by another link)
+    for _ in range(len(links) + 1):
+        if not np.any(C[:, np.flatnonzero(dependent)].getnnz()):
+            break
+        C = (C @ C).tocsr()
+    else:
+        raise ParameterError("rigid links form a cycle of dependencies")
+    return C, dependent
+
+
+def assemble_model(
+    nodes: np.ndarray,
+    members: Sequence[ShellSet | BeamSet | PointMass | Spring | RigidLink],
+    *,
+    supports: Mapping[str, Any] | None = None,
+    node_sets: Mapping[str, Sequence[int]] | None = None,
+    node_ids: Sequence[int] | None = None,
+    drill_factor: float = DRILL_FACTOR,
+    name: str = "",
+    meta: Mapping[str, Any] | None = None,
+) -> FEModel:
+    """Assemble a general 3-D model of shells, beams, masses, springs and rigid links.
+
+    Parameters
+    ----------
+    nodes : ndarray (n_nodes, 3)
+        Node coordinates (m).
+    members : sequence
+        :class:`ShellSet`, :class:`BeamSet`, :class:`PointMass`, :class:`Spring`,
+        :class:`RigidLink` in any order.
+    supports : mapping of node-set name to support, optional
+        Support type (:data:`GENERAL_SUPPORTS`) or list of DOF names per node set.
+    node_sets : mapping of str to node indices, optional
+    node_ids : sequence of int, optional
+        External node labels (default 1..n), kept in :attr:`FEModel.node_ids`.
+    drill_factor : float
+        Shell drilling penalty, see :mod:`mvtk.fe._shell`.
+    name : str
+    meta : mapping, optional
+
+    Returns
+    -------
+    FEModel
+        ``elements`` holds ``"mitc4"``, ``"mitc3"``, ``"beam2"`` connectivities;
+        ``meta["element_sets"]`` maps each member set name to ``(type, indices)`` into
+        those arrays; ``meta["unused_dofs"]`` the global DOFs removed for carrying
+        neither stiffness nor mass; ``meta["recovery"]`` (with rigid links) the sparse
+        ``T`` (n_nodes * 6, n_dof) giving every nodal DOF, dependent ones included, as
+        ``u = T q`` (used by :meth:`FEModel.expand`).
+    """
+    nodes = np.asarray(nodes, dtype=float)
+    if nodes.ndim != 2 or nodes.shape[1] != 3 or not np.all(np.isfinite(nodes)):
+        raise DimensionError(f"nodes must be a finite (n_nodes, 3) array, got {nodes.shape}")
+    n_nodes = len(nodes)
+    n_all = 6 * n_nodes
+    node_sets = {str(k): np.asarray(v, dtype=np.int64) for k, v in (node_sets or {}).items()}
+    for k, v in node_sets.items():
+        if v.size and (v.min() < 0 or v.max() >= n_nodes):
+            raise ParameterError(f"node set {k!r} refers to nodes outside 0..{n_nodes - 1}")
+    ident = np.arange(n_all)
+    K = sp.csr_matrix((n_all, n_all))
+    M = sp.csr_matrix((n_all, n_all))
+    conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "beam2": []}
+    counts = {"mitc4": 0, "mitc3": 0, "beam2": 0}
+    element_sets: dict[str, tuple[str, np.ndarray]] = {}
+    links = []
+    shell_groups: list = []
+    beam_groups: list = []
+    normals = np.zeros((n_nodes, 3))
+    for i, mbr in enumerate(members):
+        if isinstance(mbr, ShellSet):
+            el = mbr.elements
+            if el.size and (el.min() < 0 or el.max() >= n_nodes):
+                raise ParameterError(f"shell set {mbr.name!r}: node index outside "
+                                     f"0..{n_nodes - 1}")
+            lam = mbr.laminate()
+            axis = np.asarray(mbr.material_axis, dtype=float)
+            # in chunks: element matrices of large meshes never exist all at once
+            for start in range(0, len(el), _CHUNK):
+                c = el[start:start + _CHUNK]
+                xyz = nodes[c]
+                Ke, Me = shell_element_matrices(
+                    xyz, lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]),
+                    np.full(len(c), lam.thickness),
+                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
+                np.add.at(normals, c.ravel(), np.repeat(shell_frames(xyz)[:, 2], c.shape[1],
+                                                        axis=0))
+                dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
+                K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
+                M = M + assemble_element_matrices(Me, dofs, ident, n_all)
+            kind = "mitc4" if el.shape[1] == 4 else "mitc3"
+        elif isinstance(mbr, BeamSet):
+            el = mbr.elements
+            if el.size and (el.min() < 0 or el.max() >= n_nodes):
+                raise ParameterError(f"beam set {mbr.name!r}: node index outside "
+                                     f"0..{n_nodes - 1}")
+            off = np.asarray(mbr.offset)
+            xa, xb = nodes[el[:, 0]] + off, nodes[el[:, 1]] + off
+            props = np.repeat(_section_array([mbr.section]), len(el), axis=0)
+            try:
+                Ke, Me = _global_matrices(xa, xb, props, mbr.orientation)
+            except ParameterError as err:
+                raise ParameterError(f"beam set {mbr.name!r}: {err}") from err
+            if np.any(off):
+                W = np.zeros((12, 12))
+                W[:6, :6] = W[6:, 6:] = _offset_matrix(off)
+                Ke, Me = W.T @ Ke @ W, W.T @ Me @ W
+            kind = "beam2"
+        elif isinstance(mbr, PointMass):
+            if not 0 <= int(mbr.node) < n_nodes:
+                raise ParameterError(f"point mass: node {mbr.node} outside 0..{n_nodes - 1}")
+            dofs = 6 * int(mbr.node) + np.arange(6)
+            M = M + assemble_element_matrices(mbr.matrix()[None], dofs[None], ident, n_all)
+            continue
+        elif isinstance(mbr, Spring):
+            nn = [mbr.node_a] if mbr.node_b is None else [mbr.node_a, mbr.node_b]
+            if any(not 0 <= int(n) < n_nodes for n in nn):
+                raise ParameterError(f"spring: node {nn} outside 0..{n_nodes - 1}")
+            dofs = (6 * np.asarray(nn)[:, None] + np.arange(6)).ravel()
+            K = K + assemble_element_matrices(mbr.matrix()[None], dofs[None], ident, n_all)
+            continue
+        elif isinstance(mbr, RigidLink):
+            links.append(mbr)
+            continue
+        else:
+            raise ParameterError(f"member {i}: unsupported type {type(mbr).__name__}")
+        if kind == "beam2":
+            dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
+            K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
+            M = M + assemble_element_matrices(Me, dofs, ident, n_all)
+        if kind == "beam2":
+            beam_groups.append((counts[kind] + np.arange(len(el)), mbr.section,
+                                mbr.orientation, mbr.offset))
+        else:
+            shell_groups.append((kind, counts[kind] + np.arange(len(el)), lam,
+                                 mbr.material_axis))
+        name_ = getattr(mbr, "name", kind)
+        if name_ in element_sets:
+            raise ParameterError(f"element set name {name_!r} used twice")
+        element_sets[name_] = (kind, counts[kind] + np.arange(len(el)))
+        conn[kind].append(el)
+        counts[kind] += len(el)
+
+    fixed = np.zeros(n_all, dtype=bool)
+    for set_name, kind in (supports or {}).items():
+        if set_name not in node_sets:
+            raise ParameterError(
+                f"support on unknown node set {set_name!r}; available: {sorted(node_sets)}"
+            )
+        ns = node_sets[set_name]
+        nrm = normals[ns].sum(axis=0)
+        nrm = nrm / np.linalg.norm(nrm) if np.linalg.norm(nrm) > 0 else None
+        fixed[support_dofs(nodes, ns, kind, f"support {set_name!r}", nrm)] = True
+    C, dependent = _constraint_matrix(nodes, links)
+    clash = fixed & dependent
+    if np.any(clash):
+        g = int(np.flatnonzero(clash)[0])
+        raise ParameterError(f"DOF {DOF_NAMES[g % 6]} of node {g // 6} is both supported and "
+                             "dependent in a rigid link; support the independent node instead")
+    keep = np.flatnonzero(~fixed & ~dependent)
+    T = C[:, keep].tocsc()
+    Kr = (T.T @ K @ T).tocsr()
+    Mr = (T.T @ M @ T).tocsr()
+    scale_k = max(float(np.abs(Kr.diagonal()).max(initial=0.0)), 1e-300)
+    scale_m = max(float(np.abs(Mr.diagonal()).max(initial=0.0)), 1e-300)
+    alive = (np.abs(Kr.diagonal()) > 1e-14 * scale_k) | (np.abs(Mr.diagonal())
+                                                          > 1e-14 * scale_m)
+    unused = keep[~alive]
+    if not np.all(alive):
+        sel = np.flatnonzero(alive)
+        Kr, Mr, keep, T = Kr[sel][:, sel], Mr[sel][:, sel], keep[sel], T[:, sel]
+    Kr = ((Kr + Kr.T) * 0.5).tocsr()
+    Mr = ((Mr + Mr.T) * 0.5).tocsr()
+    elements = {k: np.concatenate(v) for k, v in conn.items() if v}
+    out_meta = {"element_sets": element_sets, "unused_dofs": unused,
+                "recovery": T.tocsr() if links else None,
+                "supports": dict(supports or {}), "members": tuple(members),
+                "shell_groups": shell_groups, "beam_groups": beam_groups,
+                "drill_factor": drill_factor}
+    out_meta.update(meta or {})
+    return FEModel(nodes=nodes, M=Mr, K=Kr, dof_node=keep // 6, dof_component=keep % 6,
+                   node_sets=node_sets, elements=elements, name=name, meta=out_meta,
+                   node_ids=node_ids)
+

@@ -1,0 +1,133 @@
+"""Assembled third-party matrices (Matrix Market, MATLAB .mat) with their DOF table.
+
+:func:`read_matrices` turns a stiffness and a mass matrix exported by another FE code
+into an :class:`~mvtk.fe.FEModel`, so that modal analysis, reduction, control and
+correlation run on it. The DOF table names the node label and component of every row:
+a CSV file (or array) with columns ``node`` (int label) and ``dof`` (``1..6`` as in
+Nastran/UFF, or a name ``ux uy uz rx ry rz``), one row per matrix row, in matrix order.
+Node coordinates (CSV ``node, x, y, z``) are optional; without them every node sits at
+the origin (the model then has no geometry for plots or mode labels from energy).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import scipy.io
+import scipy.sparse as sp
+
+from ..errors import DimensionError, FormatError
+from ._model import DOF_NAMES, FEModel
+
+__all__ = ["read_matrices"]
+
+
+def _load_matrix(path: Path, key: str):
+    if not path.exists():
+        raise FormatError(f"matrix file {str(path)!r} not found")
+    try:
+        if path.suffix.lower() == ".mat":
+            data = scipy.io.loadmat(path)
+            if key not in data:
+                raise FormatError(f"{str(path)!r}: no variable {key!r}; found "
+                                  f"{sorted(k for k in data if not k.startswith('__'))}")
+            return sp.csr_matrix(data[key], dtype=float)
+        return sp.csr_matrix(scipy.io.mmread(path), dtype=float)
+    except FormatError:
+        raise
+    except (ValueError, OSError) as err:
+        raise FormatError(f"{str(path)!r} is not a readable Matrix Market / .mat file: "
+                          f"{err}") from err
+
+
+def _read_table(source, columns: int, what: str) -> list[list[str]]:
+    if isinstance(source, (str, Path)):
+        path = Path(source)
+        if not path.exists():
+            raise FormatError(f"{what} file {str(path)!r} not found")
+        rows = []
+        for i, line in enumerate(path.read_text().splitlines(), start=1):
+            text = line.split("#")[0].strip()
+            if not text:
+                continue
+            parts = [p.strip() for p in text.replace(";", ",").split(",")]
+            if i == 1 and not parts[0].lstrip("-").isdigit():
+                continue  # header
+            if len(parts) != columns:
+                raise FormatError(f"{str(path)!r} line {i}: expected {columns} columns, got "
+                                  f"{len(parts)}")
+            rows.append(parts)
+        return rows
+    arr = np.asarray(source, dtype=object)
+    if arr.ndim != 2 or arr.shape[1] != columns:
+        raise DimensionError(f"{what} must have {columns} columns, got shape {arr.shape}")
+    return [[str(v) for v in r] for r in arr]
+
+
+def read_matrices(K, M, dof_table, nodes=None, name: str = "") -> FEModel:
+    """FE model from assembled matrices and a DOF table.
+
+    Parameters
+    ----------
+    K, M : path or sparse matrix
+        Stiffness (N/m) and mass (kg) matrices: ``.mtx`` (Matrix Market) or ``.mat``
+        (variables ``K`` and ``M``), or matrices in memory.
+    dof_table : path or array (n_dof, 2)
+        ``node, dof`` per matrix row (see the module notes).
+    nodes : path or array (n_nodes, 4), optional
+        ``node, x, y, z`` (m).
+    name : str
+
+    Raises
+    ------
+    FormatError
+        Unreadable files, a bad DOF code (the message names the row), a node missing from
+        the coordinate table.
+    DimensionError
+        Sizes that do not agree or a non-symmetric matrix.
+    """
+    Km = _load_matrix(Path(K), "K") if isinstance(K, (str, Path)) else sp.csr_matrix(K)
+    Mm = _load_matrix(Path(M), "M") if isinstance(M, (str, Path)) else sp.csr_matrix(M)
+    n = Km.shape[0]
+    if Km.shape != (n, n) or Mm.shape != (n, n):
+        raise DimensionError(f"K {Km.shape} and M {Mm.shape} must be square and equal")
+    for label, A in (("K", Km), ("M", Mm)):
+        asym = abs(A - A.T).max() if A.nnz else 0.0
+        if asym > 1e-8 * max(abs(A).max(), 1e-300):
+            raise DimensionError(f"{label} is not symmetric (max |A - A'| = {asym:.3g})")
+    rows = _read_table(dof_table, 2, "DOF table")
+    if len(rows) != n:
+        raise DimensionError(f"the DOF table has {len(rows)} rows, the matrices {n}")
+    labels, comps = [], []
+    for i, (node, dof) in enumerate(rows, start=1):
+        try:
+            labels.append(int(node))
+        except ValueError:
+            raise FormatError(f"DOF table row {i}: node {node!r} is not an integer") from None
+        if dof in DOF_NAMES:
+            comps.append(DOF_NAMES.index(dof))
+        elif dof.isdigit() and 1 <= int(dof) <= 6:
+            comps.append(int(dof) - 1)
+        else:
+            raise FormatError(f"DOF table row {i}: dof {dof!r} is not 1..6 or one of "
+                              f"{', '.join(DOF_NAMES)}")
+    ids = np.unique(labels)
+    if nodes is None:
+        xyz = np.zeros((len(ids), 3))
+        node_ids = ids
+    else:
+        table = _read_table(nodes, 4, "node table")
+        try:
+            node_ids = np.array([int(r[0]) for r in table])
+            xyz = np.array([[float(v) for v in r[1:]] for r in table])
+        except ValueError as err:
+            raise FormatError(f"node table: expected 'node, x, y, z' numbers ({err})") from err
+        missing = np.setdiff1d(ids, node_ids)
+        if missing.size:
+            raise FormatError(f"nodes {missing[:5].tolist()} of the DOF table are not in the "
+                              "node table")
+    index = {int(v): i for i, v in enumerate(node_ids)}
+    return FEModel(nodes=xyz, M=Mm, K=Km, dof_node=[index[v] for v in labels],
+                   dof_component=comps, node_ids=node_ids, name=name,
+                   meta={"source": "assembled matrices"})
