@@ -70,28 +70,31 @@ def accumulate_cross(
     win_y: np.ndarray,
     win_r: np.ndarray,
     detrend,
+    nfft: int | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sum over segments of ``Y conj(R)``, ``R conj(R)`` and ``|Y|**2``.
 
     Segments start at ``starts``; ``win_y``/``win_r`` are the windows applied to the
     response and reference segments (they differ for impact tests). Processed in
-    blocks of segments so memory stays bounded. Returns unscaled sums
+    blocks of segments so memory stays bounded; ``nfft`` > ``nperseg`` zero-pads each
+    segment. Returns unscaled sums
     ``(Gyr (ny, nr, nf), Grr (nr, nr, nf), Gyy (ny, nf))``.
     """
     ny, nr = y.shape[0], r.shape[0]
-    nf = nperseg // 2 + 1
+    nfft = nperseg if nfft is None else int(nfft)
+    nf = nfft // 2 + 1
     gyr = np.zeros((ny, nr, nf), dtype=complex)
     grr = np.zeros((nr, nr, nf), dtype=complex)
     gyy = np.zeros((ny, nf))
-    per_seg = (ny + nr) * nf * 16 + (ny + nr) * nperseg * 8
+    per_seg = (ny + nr) * nf * 16 + (ny + nr) * nfft * 8
     block = max(1, int(_BLOCK_BYTES // max(per_seg, 1)))
     offs = np.arange(nperseg)
     for b0 in range(0, len(starts), block):
         idx = starts[b0:b0 + block, None] + offs  # (nb, nperseg)
         ys = _detrend(y[:, idx], detrend) * win_y  # (ny, nb, nperseg)
         rs = _detrend(r[:, idx], detrend) * win_r
-        yf = scipy.fft.rfft(ys, axis=-1)
-        rf = scipy.fft.rfft(rs, axis=-1)
+        yf = scipy.fft.rfft(ys, nfft, axis=-1)
+        rf = scipy.fft.rfft(rs, nfft, axis=-1)
         gyr += np.einsum("isf,jsf->ijf", yf, rf.conj())
         grr += np.einsum("isf,jsf->ijf", rf, rf.conj())
         gyy += np.sum(yf.real**2 + yf.imag**2, axis=1)
