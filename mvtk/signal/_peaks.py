@@ -148,6 +148,9 @@ def find_peaks(
         Frequency band in Hz searched for peaks. Default ``fmax`` for an impact FRF from
         :func:`mvtk.signal.frf`: the top of its ``excitation_band_hz`` (the force
         spectrum has dropped by 20 dB there; above it the FRF is noise over no input).
+        Default ``fmin`` when the input states ``resolution_hz`` (FRFs from
+        :func:`mvtk.signal.frf`): 5 x that resolution (a mode needs 5 cycles in the
+        record; below it drift and offsets make peaks).
     prominence_db : float
         Minimum prominence in dB (default 6 dB).
     noise_factor : float
@@ -178,6 +181,8 @@ def find_peaks(
     band = curves.attrs.get("excitation_band_hz")
     if fmax is None and band is not None and len(band) == 2:
         fmax = float(band[1])
+    if fmin is None and curves.attrs.get("resolution_hz"):
+        fmin = 5.0 * float(curves.attrs["resolution_hz"])
     if not np.isfinite(amp).all():
         bad = np.flatnonzero(~np.isfinite(amp).all(axis=0))
         raise FormatError(
