@@ -11,6 +11,7 @@ import scipy.signal
 
 from ..errors import AccuracyWarning, DimensionError, ParameterError, ResolutionWarning
 from ..signal._input import as_time_history, sampling_rate, select_channels
+from ._common import NoEstimateError
 
 __all__ = ["DecayResult", "log_decrement", "envelope_fit", "damping_vs_amplitude"]
 
@@ -271,7 +272,7 @@ def _run(names, data, fs, fn_hz, band, order, fit_one, t0, estimator):
         r["t1"] += t0
         rows.append(r)
     if not any(np.isfinite(r["fn"]) for r in rows):
-        raise ParameterError(
+        raise NoEstimateError(
             f"{estimator}: no channel could be fitted: "
             + "; ".join(f"{n!r}: {r['why']}" for n, r in zip(names, rows))
         )

@@ -18,6 +18,7 @@ from ..errors import (
 from ..signal._curves import amplitude_curves
 from ..signal._frf import exponential_window_correction
 from ..signal._peaks import MAX_PEAKS, _coherence, find_peaks
+from ._common import NoEstimateError
 
 __all__ = ["HalfPowerResult", "half_power", "half_power_zeta"]
 
@@ -327,8 +328,9 @@ def half_power(
         ``"fit"`` (default; measured best on real and synthetic data, see
         ``docs/damping.md`` and ``benchmarks/bench_damping.py``): the quadratic below
         fitted by least squares (relative error) to every line above ``fit_level`` x
-        peak, so one noisy line does not move the -3 dB points. ``"interpolate"``: the peak and each -3 dB crossing are interpolated by the
-        quadratic through three neighbouring lines of ``u**p / |H|**2`` with
+        peak, so one noisy line does not move the -3 dB points. ``"interpolate"``: the
+        peak and each -3 dB crossing are interpolated by the quadratic through three
+        neighbouring lines of ``u**p / |H|**2`` with
         ``u = omega**2`` (``p`` = 0, 1, 2 for receptance, mobility, accelerance), which is
         exactly quadratic for a single viscous mode, so noise-free single-mode data are
         recovered exactly at any line spacing, but noise on the three lines at the
@@ -401,7 +403,7 @@ def half_power(
                            power=power, coherence=coh, max_peaks=max_modes)
         targets = peaks.fn_hz
         if targets.size == 0:
-            raise ParameterError(
+            raise NoEstimateError(
                 "half_power: no peak stands out of the noise (prominence >= max(6 dB, 5 x "
                 f"the {peaks.noise_db:.2g} dB line-to-line jitter)"
                 + (", coherence >= 0.5" if coh is not None else "")
@@ -421,10 +423,15 @@ def half_power(
                             "need", "scatter", "quality", "kind", "reason", "coh")}
     for label, a, ck in zip(curves.labels, curves.amplitude, curves.kinds):
         p = _POWER[ck]
+        seen: set[int] = set()
         for m, ft in enumerate(targets):
             k0 = int(np.argmin(np.abs(f - ft)))
             search = max(3, int(np.ceil(0.02 * ft / df)))
             res, quality = _one_mode(f, a, k0, p, search, method, fit_level)
+            if fn_hz is None and res and res["k"] in seen:
+                continue  # two picked peaks climb to one maximum: one row per peak
+            if res:
+                seen.add(res["k"])
             if quality == "nonfinite":
                 bad = f[max(k0 - search - 1, 0):k0 + search + 2]
                 raise FormatError(

@@ -183,6 +183,7 @@ _FORCE_DROP_DB = 20.0
 # random excitation: search of the segment length
 _MIN_AVERAGES = 8       # fewest Welch averages (50 % overlap) the automatic choice accepts
 _LINES_TARGET = 8.0     # lines wanted across the narrowest half-power band
+_COHERENT = 0.98        # peak coherence above which averaging is not needed
 
 
 def _auto_nperseg(y, r, fs, window, detrend):
@@ -190,7 +191,10 @@ def _auto_nperseg(y, r, fs, window, detrend):
 
     Starts at 32 averages and doubles the segment while the narrowest clear peak of the
     summed H1 amplitude has fewer than ``_LINES_TARGET`` lines between its -3 dB points
-    and at least ``_MIN_AVERAGES`` averages remain. Returns (nperseg, reason).
+    and at least ``_MIN_AVERAGES`` averages remain. When the coherence at the peaks is
+    already above ``_COHERENT`` with 32 averages (deterministic excitation such as a
+    sine sweep, or a very clean test), averaging buys nothing and the segment may grow
+    to the whole record. Returns (nperseg, reason).
     """
     from ._peaks import find_peaks
 
@@ -198,12 +202,15 @@ def _auto_nperseg(y, r, fs, window, detrend):
     max_seg = int(2 ** np.floor(np.log2(2 * n / (_MIN_AVERAGES + 1))))
     seg = int(min(max(2 ** np.floor(np.log2(2 * n / 33)), 64), max(max_seg, 16), n))
     reason = ""
+    first = True
+    coherent = False
     while True:
         win = _window(window, seg)
         starts = _segment_starts(n, seg, seg // 2)
-        gyr, grr, _ = accumulate_cross(y, r[:1], starts, seg, win, win, detrend)
+        gyr, grr, gyy = accumulate_cross(y, r[:1], starts, seg, win, win, detrend)
         with np.errstate(divide="ignore", invalid="ignore"):
             h = np.abs(gyr[:, 0, :] / grr[0, 0][None, :])
+            coh = np.abs(gyr[:, 0, :]) ** 2 / (gyy * np.real(grr[0, 0])[None, :])
         h[~np.isfinite(h)] = 0.0
         f = scipy.fft.rfftfreq(seg, 1 / fs)
         lines = np.inf
@@ -222,13 +229,20 @@ def _auto_nperseg(y, r, fs, window, detrend):
                 while jr < amp.size - 1 and amp[jr] > lvl:
                     jr += 1
                 lines = min(lines, jr - jl - 1)
-        reason = (f"{len(starts)} averages of {seg} samples (df = {fs / seg:.4g} Hz); "
+            if first and len(starts) >= 16:
+                c = np.nan_to_num(np.mean(coh[:, pk.index + 1], axis=0))
+                coherent = bool(np.median(c) > _COHERENT)
+        first = False
+        limit = n if coherent else max_seg
+        reason = (f"{len(starts)} average(s) of {seg} samples (df = {fs / seg:.4g} Hz); "
                   f"narrowest peak {lines:g} lines wide at -3 dB")
-        if lines >= _LINES_TARGET or 2 * seg > max_seg or 2 * seg > n:
+        if lines >= _LINES_TARGET or 2 * seg > limit:
             break
         seg *= 2
+    if coherent:
+        reason += f"; coherence at the peaks > {_COHERENT:g}: fewer averages accepted"
     if lines < _LINES_TARGET:
-        reason += (f"; the record allows no longer segment with >= {_MIN_AVERAGES} averages: "
+        reason += ("; the record allows no longer segment with enough averages: "
                    "damping of the narrowest peaks is limited by resolution")
     return seg, reason
 

@@ -220,16 +220,19 @@ def find_peaks(
         idx, prom = idx[ok], prom[ok]
     # one row per physical peak: drop peaks inside the -3 dB band of a stronger one
     order = np.argsort(prom)[::-1]
-    kept: list[int] = []
-    for j in order:
-        i = idx[j] + lo
-        if any(lo_w <= i <= hi_w for lo_w, hi_w in
-               ((idx[k] + lo - _half_width(total, idx[k] + lo)[0],
-                 idx[k] + lo + _half_width(total, idx[k] + lo)[1]) for k in kept)):
-            continue
-        kept.append(int(j))
     limit = int(n_peaks) if n_peaks is not None else int(max_peaks)
-    kept = sorted(kept[:limit])
+    kept: list[int] = []
+    spans: list[tuple[int, int]] = []
+    for j in order:
+        if len(kept) >= limit:
+            break
+        i = idx[j] + lo
+        if any(a <= i <= b for a, b in spans):
+            continue
+        left, right = _half_width(total, i)
+        kept.append(int(j))
+        spans.append((i - left, i + right))
+    kept = sorted(kept)
     idx, prom = idx[kept] + lo, prom[kept]
     fpk = f[idx].astype(float)
     for k, i in enumerate(idx):
