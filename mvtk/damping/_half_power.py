@@ -424,6 +424,7 @@ def half_power(
     for label, a, ck in zip(curves.labels, curves.amplitude, curves.kinds):
         p = _POWER[ck]
         seen: set[int] = set()
+        n_rows = 0
         for m, ft in enumerate(targets):
             k0 = int(np.argmin(np.abs(f - ft)))
             search = max(3, int(np.ceil(0.02 * ft / df)))
@@ -482,7 +483,8 @@ def half_power(
                 reason = "the -3 dB points were not found on both sides of the peak"
             pk_hz = np.sqrt(res["upk"]) / (2 * np.pi) if res else np.nan
             rows["curve"].append(label)
-            rows["mode"].append(m)
+            rows["mode"].append(m if fn_hz is not None else n_rows)
+            n_rows += 1
             rows["fn"].append(fn)
             rows["zeta"].append(z)
             rows["f1"].append(f1)
