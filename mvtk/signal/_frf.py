@@ -187,31 +187,59 @@ _COHERENT = 0.98        # peak coherence above which averaging is not needed
 
 
 def _auto_nperseg(y, r, fs, window, detrend):
-    """Segment length for random excitation chosen from the data.
+    """Segment length of an H1 FRF under random excitation, chosen from the data.
 
-    Starts at 32 averages and doubles the segment while the narrowest clear peak of the
-    summed H1 amplitude has fewer than ``_LINES_TARGET`` lines between its -3 dB points
-    and at least ``_MIN_AVERAGES`` averages remain. When the coherence at the peaks is
-    already above ``_COHERENT`` with 32 averages (deterministic excitation such as a
-    sine sweep, or a very clean test), averaging buys nothing and the segment may grow
-    to the whole record. Returns (nperseg, reason).
+    See :func:`auto_segment`; the curves are ``|H1|`` of every response against the
+    first reference, with their coherence. Returns (nperseg, reason).
+    """
+    def curves(seg):
+        win = _window(window, seg)
+        starts = _segment_starts(y.shape[1], seg, seg // 2)
+        gyr, grr, gyy = accumulate_cross(y, r[:1], starts, seg, win, win, detrend)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = np.abs(gyr[:, 0, :] / grr[0, 0][None, :])
+            coh = np.abs(gyr[:, 0, :]) ** 2 / (gyy * np.real(grr[0, 0])[None, :])
+        return h, coh, len(starts)
+
+    return auto_segment(y.shape[1], fs, curves)
+
+
+def auto_segment(n: int, fs: float, curves) -> tuple[int, str]:
+    """Welch segment length (power of two) that resolves the narrowest clear peak.
+
+    Starts at 32 averages (50 % overlap) and doubles the segment while the narrowest
+    peak found by :func:`mvtk.signal.find_peaks` on the summed amplitude spans fewer
+    than 8 lines between its -3 dB points and at least 8 averages remain. When the
+    coherence at the peaks (if ``curves`` gives one) is already above 0.98 with 32
+    averages (deterministic excitation such as a sine sweep, or a very clean test),
+    averaging buys nothing and the segment may grow to the whole record.
+
+    Parameters
+    ----------
+    n : int
+        Record length in samples.
+    fs : float
+        Sampling rate in Hz.
+    curves : callable
+        ``curves(nperseg) -> (amplitude (n_curves, n_freq), coherence or None,
+        n_averages)``.
+
+    Returns
+    -------
+    nperseg : int
+    reason : str
+        The choice and what limited it, in words.
     """
     from ._peaks import find_peaks
 
-    n = y.shape[1]
     max_seg = int(2 ** np.floor(np.log2(2 * n / (_MIN_AVERAGES + 1))))
     seg = int(min(max(2 ** np.floor(np.log2(2 * n / 33)), 64), max(max_seg, 16), n))
     reason = ""
     first = True
     coherent = False
     while True:
-        win = _window(window, seg)
-        starts = _segment_starts(n, seg, seg // 2)
-        gyr, grr, gyy = accumulate_cross(y, r[:1], starts, seg, win, win, detrend)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            h = np.abs(gyr[:, 0, :] / grr[0, 0][None, :])
-            coh = np.abs(gyr[:, 0, :]) ** 2 / (gyy * np.real(grr[0, 0])[None, :])
-        h[~np.isfinite(h)] = 0.0
+        h, coh, n_avg = curves(seg)
+        h = np.where(np.isfinite(h), h, 0.0)
         f = scipy.fft.rfftfreq(seg, 1 / fs)
         lines = np.inf
         try:
@@ -229,12 +257,12 @@ def _auto_nperseg(y, r, fs, window, detrend):
                 while jr < amp.size - 1 and amp[jr] > lvl:
                     jr += 1
                 lines = min(lines, jr - jl - 1)
-            if first and len(starts) >= 16:
+            if first and coh is not None and n_avg >= 16:
                 c = np.nan_to_num(np.mean(coh[:, pk.index + 1], axis=0))
                 coherent = bool(np.median(c) > _COHERENT)
         first = False
         limit = n if coherent else max_seg
-        reason = (f"{len(starts)} average(s) of {seg} samples (df = {fs / seg:.4g} Hz); "
+        reason = (f"{n_avg} average(s) of {seg} samples (df = {fs / seg:.4g} Hz); "
                   f"narrowest peak {lines:g} lines wide at -3 dB")
         if lines >= _LINES_TARGET or 2 * seg > limit:
             break

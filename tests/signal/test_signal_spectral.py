@@ -200,3 +200,14 @@ def test_find_peaks_free_free_beam(shared_data):
     h = np.loadtxt(shared_data / "uff" / "meas_point_1.txt", dtype=complex)
     pk = find_peaks(h, np.arange(h.size, dtype=float), n_peaks=6)
     np.testing.assert_allclose(pk.fn_hz, [52, 142, 279, 460, 687, 959], atol=1.0)
+
+
+def test_psd_auto_segment_resolves_the_mode():
+    # issue 14: a fixed 256-sample default gives 2 Hz lines for a 0.2 Hz wide mode
+    rng = np.random.default_rng(2)
+    x = T.random_excitation_test([20.0], [0.005], 512.0, 400.0, rng).isel(channel=[1])
+    p = psd(x)
+    band = 2 * 0.005 * 20.0
+    assert band / p.attrs["df_hz"] >= 5 and p.attrs["n_averages"] >= 8
+    assert "narrowest peak" in p.attrs["resolution_reason"]
+    assert psd(x, nperseg=None).attrs["nperseg"] == 256  # scipy's default on request
