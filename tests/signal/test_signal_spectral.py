@@ -211,3 +211,12 @@ def test_psd_auto_segment_resolves_the_mode():
     assert band / p.attrs["df_hz"] >= 5 and p.attrs["n_averages"] >= 8
     assert "narrowest peak" in p.attrs["resolution_reason"]
     assert psd(x, nperseg=None).attrs["nperseg"] == 256  # scipy's default on request
+
+
+def test_find_peaks_ignores_nan_lines():
+    f = np.linspace(0, 100, 2001)
+    h = np.abs(T.modal_frf(f, [40.0], [0.02]).values[0, 0])
+    h[0] = np.nan  # 0/0 at 0 Hz of an H1 FRF
+    assert find_peaks(h, f).fn_hz == pytest.approx([40.0], rel=1e-3)
+    with pytest.raises(FormatError, match="no finite value"):
+        find_peaks(np.full(10, np.nan), np.arange(10.0))
