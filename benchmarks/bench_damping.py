@@ -8,6 +8,12 @@ scipy.signal.welch / scipy.signal.csd on the same data in the same run, channel 
 channel block (so memory stays bounded), and prints the mvtk/scipy time ratio.
 Part 2 prints the accuracy table of the damping estimators on seeded synthetic data with
 known fn and zeta.
+Part 3 (issue 14) compares the default choices: the old fixed 256-sample FRF default
+against the data-driven one and the two half-power variants ("fit", now the default,
+and "interpolate") on real files of ../shared/data (when present) and on simulated
+12-average H1 measurements, and prints the calibration of the "noisy" flag.
+
+    .venv/bin/python benchmarks/bench_damping.py --skip-speed --skip-accuracy   # part 3
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ from __future__ import annotations
 import argparse
 import time
 import warnings
+from pathlib import Path
 
 import numpy as np
 import scipy.signal
@@ -150,6 +157,74 @@ def bench_accuracy(reps: int) -> None:
             _row(est.__name__, f"2 modes band-pass z={zeta:.2%} 40 dB", errs)
 
 
+SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def _lvm(path: Path):
+    lines = path.read_text().splitlines()
+    i = next(k for k, line in enumerate(lines) if line.startswith("X_Value"))
+    rows = [line.split("\t")[1:3] for line in lines[i + 1:] if line.strip()]
+    data = np.array([[float(v.replace(",", ".")) for v in r] for r in rows]).T
+    return T.make_time_history(data, 50000.0, quantity=["acceleration", "force"],
+                               units=["g", "N"], names=["acc", "force"])
+
+
+def bench_defaults(reps: int, shared: Path) -> None:
+    warnings.simplefilter("ignore")
+    print("\ndefaults on real files: zeta by estimator setting (expert = envelope fit of the "
+          "decay band-passed +-10 % around the mode, 4th-order Butterworth)")
+    print(f"{'file':<18}{'fn Hz':>8}{'expert':>10}{'old 256':>10}{'fit':>10}{'interp':>10}"
+          f"{'fit err':>9}{'interp err':>11}")
+    cases = []
+    for name in ("acceleration", "camera"):
+        if (shared / "lvm" / f"{name}.lvm").is_file():
+            cases.append((f"{name}.lvm", _lvm(shared / "lvm" / f"{name}.lvm"), "force", "acc",
+                          [695.7, 1898.1, 3671.0]))
+    if (shared / "mat" / "case1.mat").is_file():
+        import scipy.io
+
+        m = scipy.io.loadmat(shared / "mat" / "case1.mat")
+        x = T.make_time_history(np.vstack([m["Time_chan_1"].ravel(), m["Time_chan_2"].ravel()])
+                                .astype(float), 1280.0, quantity=["force", "acceleration"],
+                                units=["N", "m/s^2"], names=["force", "acc"])
+        cases.append(("case1.mat", x, "force", "acc", [212.1]))
+    if not cases:
+        print(f"  (no files: {shared} not found)")
+    for label, x, ref, resp, fns in cases:
+        old = half_power(frf(x, ref, nperseg=256, excitation="random"), fn_hz=fns,
+                         method="interpolate")
+        new = {m: half_power(frf(x, ref), fn_hz=fns, method=m) for m in ("fit", "interpolate")}
+        for k, fn in enumerate(fns):
+            ex = envelope_fit(x, fn, channel=resp, band_hz=(0.9 * fn, 1.1 * fn), order=4).zeta[0]
+            zf, zi = new["fit"].zeta[k], new["interpolate"].zeta[k]
+            print(f"{label:<18}{fn:>8.1f}{ex:>10.3e}{old.zeta[k]:>10.3e}{zf:>10.3e}{zi:>10.3e}"
+                  f"{(zf / ex - 1) * 100:>8.1f}%{(zi / ex - 1) * 100:>10.1f}%")
+    print("\nhalf-power variants on simulated H1 (Hann, 8192-sample segments, 2 modes "
+          "20/55 Hz, zeta 1 %/0.5 %): zeta error % (RMS over seeds) and the scatter that "
+          "drives the 'noisy' flag (max_scatter = 5 %)")
+    print(f"{'averages':>9}{'noise':>7}{'fit rms %':>11}{'interp rms %':>14}"
+          f"{'scatter min..max':>20}{'flagged':>9}")
+    for n_avg in (2, 4, 12):
+        for noise in (0.05, 0.3):
+            err = {"fit": [], "interpolate": []}
+            sc = []
+            for seed in range(max(reps // 2, 3)):
+                rng = np.random.default_rng(100 + seed)
+                x = T.random_excitation_test([20.0, 55.0], [0.01, 0.005], 512.0,
+                                             8192 * (n_avg + 1) / 2 / 512.0, rng)
+                x = T.add_noise(x, rng, rms_fraction=noise)
+                d = frf(x, "force", nperseg=8192)
+                for m in err:
+                    r = half_power(d, fn_hz=[20.0, 55.0], method=m, max_scatter=1.0)
+                    err[m] += list(r.zeta / np.array([0.01, 0.005]) - 1)
+                sc += list(r.scatter)
+            sc = np.asarray(sc)
+            rms = {m: np.sqrt(np.nanmean(np.square(v))) * 100 for m, v in err.items()}
+            print(f"{n_avg:>9d}{noise:>7.0%}{rms['fit']:>11.1f}{rms['interpolate']:>14.1f}"
+                  f"{np.nanmin(sc):>10.3f}..{np.nanmax(sc):<8.3f}"
+                  f"{np.mean(sc > 0.05):>9.0%}")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--channels", type=int, default=64)
@@ -168,6 +243,7 @@ def main() -> None:
         bench_speed(args.channels, args.minutes, args.fs, args.block, args.nperseg)
     if not args.skip_accuracy:
         bench_accuracy(args.reps)
+    bench_defaults(args.reps, SHARED if SHARED.is_dir() else Path("/work/shared/data"))
 
 
 if __name__ == "__main__":

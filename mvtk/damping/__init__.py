@@ -1,12 +1,13 @@
 """Damping identification: half-power bandwidth, free-decay fits, Rayleigh alpha/beta."""
 
-from ._decay import DecayResult, envelope_fit, log_decrement
+from ._decay import DecayResult, damping_vs_amplitude, envelope_fit, log_decrement
 from ._half_power import HalfPowerResult, half_power, half_power_zeta
 from ._rayleigh import RayleighFit, rayleigh_fit, rayleigh_zeta
 
 __all__ = [
     "DecayResult",
     "HalfPowerResult",
+    "damping_vs_amplitude",
     "RayleighFit",
     "envelope_fit",
     "half_power",

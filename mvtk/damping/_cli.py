@@ -1,4 +1,12 @@
-"""``mvtk damping FILE --fn 13.26 41.14 [--method ...]``: modal damping from a measurement."""
+"""``mvtk damping FILE``: natural frequencies and damping from a measurement, right by default.
+
+With no option the command reads the file, picks the estimator from what the file holds
+(an FRF or spectrum -> half-power; time histories with a force/reference channel -> H1 FRF
+with the resolution chosen from the record, then half-power; time histories without a
+reference -> envelope fit of the free decay per channel), and prints one row per mode
+or channel with the ``reliable`` verdict and its ``reason``. Exit code 0 when at least one
+estimate is reliable, 1 when none is (the table is still printed), 2 on bad input.
+"""
 
 from __future__ import annotations
 
@@ -6,72 +14,184 @@ import argparse
 import sys
 import warnings
 
-__all__ = ["add_parser"]
+__all__ = ["add_parser", "run"]
 
-_METHODS = ("half_power", "envelope", "log_decrement")
+_METHODS = ("auto", "half_power", "envelope", "log_decrement")
+_VARIANTS = {"half_power": ("fit", "interpolate"), "envelope": ("hilbert", "peaks")}
 
 
 def add_parser(subparsers) -> None:
     """Register the ``damping`` sub-command."""
+    from ..io._cli import parse_option
+
     p = subparsers.add_parser(
         "damping",
         help="natural frequencies and damping ratios from a measurement file",
-        description="Read a measurement file (mvtk.io.read) and identify fn and zeta: "
-        "half-power on the H1 FRF (time histories with a force channel) or on the file's "
-        "FRF/PSD, or an envelope / log-decrement fit of a free decay. Warnings (too few "
-        "lines, overlapping modes, noisy peaks) are printed to stderr.",
+        description="Read a measurement file (mvtk.io.read) and identify fn and zeta. "
+        "With no option: half-power on the file's FRF/spectrum, or on the H1 FRF of time "
+        "histories with a force channel (impact or random detected; record, windows and "
+        "resolution chosen from the data), or an envelope fit of free decays. Every row "
+        "says whether the data support it (reliable, reason). Exit 0 if at least one "
+        "estimate is reliable, 1 if none is, 2 on bad input.",
     )
     p.add_argument("file", help="measurement file readable by mvtk.io.read")
-    p.add_argument("--fn", type=float, nargs="+", metavar="HZ",
-                   help="approximate natural frequencies in Hz (default: peak picking)")
-    p.add_argument("--method", choices=_METHODS, default="half_power",
-                   help="estimator (default half_power)")
-    p.add_argument("--reference", default=None,
-                   help="reference channel for the FRF (default: channels with quantity force)")
-    p.add_argument("--impact", action="store_true", help="impact test: one record per hit")
-    p.add_argument("--nperseg", type=int, default=None, help="FRF segment/record length")
-    p.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
-                   help="band-pass edges in Hz for the decay fits (one mode)")
-    p.add_argument("--n-modes", type=int, default=None, help="peaks to pick without --fn")
+    rd = p.add_argument_group("reader options (as mvtk read)")
+    rd.add_argument("--format", default=None, help="force a reader (default: detect)")
+    rd.add_argument("--set", action="append", type=parse_option, metavar="KEY=VALUE",
+                    help="reader option, value as JSON or text (repeatable), e.g. "
+                    "--set data='[\"F\", \"a\"]'")
+    rd.add_argument("--variable", nargs="+", default=None, metavar="NAME",
+                    help="variable(s) of the file holding the data (reader option data=)")
+    rd.add_argument("--units", nargs="+", default=None, help="units per channel (reader)")
+    rd.add_argument("--quantity", nargs="+", default=None,
+                    help="quantity per channel, e.g. force acceleration (reader)")
+    rd.add_argument("--fs", type=float, default=None, help="sampling rate in Hz (reader)")
+    est = p.add_argument_group("estimator")
+    est.add_argument("--method", choices=_METHODS, default="auto",
+                     help="estimator (default auto: half_power on FRFs/spectra and on time "
+                     "histories with a reference, envelope on free decays)")
+    est.add_argument("--variant", default=None,
+                     help="half_power: fit (default) or interpolate; envelope: hilbert "
+                     "(default) or peaks")
+    est.add_argument("--fn", type=float, nargs="+", metavar="HZ",
+                     help="approximate natural frequencies in Hz (default: peak picking)")
+    est.add_argument("--fmin", type=float, default=None, help="lowest frequency searched (Hz)")
+    est.add_argument("--fmax", type=float, default=None, help="highest frequency searched (Hz)")
+    est.add_argument("--n-modes", type=int, default=None, help="peaks to pick without --fn")
+    est.add_argument("--channel", nargs="+", default=None,
+                     help="channels to analyse (responses for an FRF, decays otherwise)")
+    frf = p.add_argument_group("FRF from time histories")
+    frf.add_argument("--reference", default=None,
+                     help="reference channel (default: channels with quantity force)")
+    frf.add_argument("--excitation", choices=("auto", "random", "impact"), default="auto",
+                     help="default auto: impact if the reference is a pulse")
+    frf.add_argument("--impact", action="store_true", help="same as --excitation impact")
+    frf.add_argument("--nperseg", type=int, default=None,
+                     help="FRF segment/record length (default: chosen from the data)")
+    dec = p.add_argument_group("free decay")
+    dec.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
+                     help="band-pass edges in Hz for the decay fits (one mode)")
+    dec.add_argument("--t-start", type=float, default=None, help="start of the time window (s)")
+    dec.add_argument("--t-end", type=float, default=None, help="end of the time window (s)")
     p.add_argument("--json", action="store_true", help="print the result table as JSON")
     p.set_defaults(func=run)
 
 
-def _frf_source(ds, args):
+def _reader_options(args) -> dict:
+    opts = dict(args.set or [])
+    for key, val in (("units", args.units), ("quantity", args.quantity), ("fs", args.fs)):
+        if val is not None:
+            opts[key] = val
+    if args.variable is not None:
+        opts["data"] = args.variable[0] if len(args.variable) == 1 else args.variable
+    return opts
+
+
+def _has_reference(ds, args) -> bool:
+    th = ds["time_history"]
+    if args.reference is not None:
+        return True
+    return "quantity" in th.coords and "force" in [str(q) for q in th["quantity"].values]
+
+
+def _half_power_input(ds, args, notes):
     from .. import signal
 
-    if "time_history" in ds.data_vars:
+    if "time_history" in ds.data_vars and not any(v in ds.data_vars for v in
+                                                  ("frf", "psd", "auto_spectrum", "spectrum")):
         ref = args.reference if args.reference is not None else {"quantity": "force"}
-        return signal.frf(ds, ref, excitation="impact" if args.impact else "random",
-                          nperseg=args.nperseg)
+        excitation = "impact" if args.impact else args.excitation
+        resp = args.channel
+        fr = signal.frf(ds, ref, response=resp, excitation=excitation, nperseg=args.nperseg)
+        notes.append(f"FRF: H1, {fr.attrs['excitation']} excitation, "
+                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}")
+        return fr
+    if args.channel is not None:
+        for name in ("frf", "psd", "auto_spectrum", "spectrum"):
+            if name in ds.data_vars:
+                var = ds[name]
+                dim = "response" if "response" in var.dims else "channel"
+                return ds[[name]].sel({dim: args.channel})
     return ds
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk damping``; returns the exit code (errors propagate as MvtkError)."""
+    import pandas as pd
+
     from .. import io
+    from ..errors import ParameterError
+    from ._common import NoEstimateError
     from ._decay import envelope_fit, log_decrement
     from ._half_power import half_power
 
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        ds = io.read(args.file)
-        if args.method == "half_power":
-            res = half_power(_frf_source(ds, args), fn_hz=args.fn, n_modes=args.n_modes)
-            frames = [res.to_dataframe()]
-        else:
-            est = envelope_fit if args.method == "envelope" else log_decrement
-            fns = args.fn or [None]
-            frames = [est(ds, fn_hz=f, band_hz=args.band).to_dataframe() for f in fns]
-    import pandas as pd
-
-    table = pd.concat(frames, ignore_index=True)
+    method = args.method
+    variant = args.variant
+    notes: list[str] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            ds = io.read(args.file, format=args.format, **_reader_options(args))
+            if method == "auto":
+                method = "half_power"
+                if "time_history" in ds.data_vars and not _has_reference(ds, args) and not any(
+                        v in ds.data_vars for v in ("frf", "psd", "auto_spectrum", "spectrum")):
+                    method = "envelope"
+                notes.append(f"method: {method} (auto)")
+            if variant is not None and variant not in _VARIANTS.get(method, ()):
+                raise ParameterError(
+                    f"--variant {variant!r} is not a variant of {method}; expected one of "
+                    f"{list(_VARIANTS.get(method, ()))}")
+            if method == "half_power":
+                res = half_power(_half_power_input(ds, args, notes), fn_hz=args.fn,
+                                 n_modes=args.n_modes, fmin=args.fmin, fmax=args.fmax,
+                                 method=variant or "fit")
+                table = res.to_dataframe()
+            else:
+                th = ds
+                if "time_history" in ds.data_vars and args.channel is None \
+                        and "quantity" in ds["time_history"].coords:
+                    # a decay fit of the hammer or of a voltage makes no sense by default
+                    q = [str(v) for v in ds["time_history"]["quantity"].values]
+                    keep = [i for i, v in enumerate(q) if v != "force"]
+                    if keep and len(keep) < len(q):
+                        th = ds["time_history"].isel(channel=keep)
+                kw = dict(channel=args.channel, band_hz=args.band, t_start_s=args.t_start,
+                          t_end_s=args.t_end)
+                if method == "envelope":
+                    kw["method"] = variant or "hilbert"
+                    est = envelope_fit
+                else:
+                    est = log_decrement
+                fns = args.fn or [None]
+                table = pd.concat([est(th, fn_hz=f, **kw).to_dataframe() for f in fns],
+                                  ignore_index=True)
+    except NoEstimateError as err:
+        sys.stderr.write(f"mvtk damping: no reliable estimate: {err}\n")
+        if args.json:
+            sys.stdout.write("[]\n")
+        return 1
+    except OSError as err:
+        name = getattr(err, "filename", None) or args.file
+        sys.stderr.write(f"mvtk damping: cannot read {name}: {err.strerror or err}\n")
+        return 2
     for w in caught:
         sys.stderr.write(f"{w.category.__name__}: {w.message}\n")
+    n_ok = int(table["reliable"].sum())
+    verdict = (f"{n_ok} of {len(table)} estimate(s) reliable" if n_ok else
+               f"no reliable estimate: the data cannot support the {method} damping "
+               f"estimate (see the reason column)")
     if args.json:
         sys.stdout.write(table.to_json(orient="records") + "\n")
-        return 0
-    cols = [c for c in ("curve", "channel", "mode", "fn_hz", "zeta", "zeta_std", "n_lines",
-                        "quality") if c in table.columns]
-    sys.stdout.write(table[cols].to_string(index=False) + "\n")
+    else:
+        for note in notes:
+            sys.stdout.write(note + "\n")
+        cols = [c for c in ("curve", "channel", "mode", "fn_hz", "zeta", "zeta_std", "n_lines",
+                            "zeta_early", "zeta_late", "quality", "reliable", "reason")
+                if c in table.columns]
+        sys.stdout.write(table[cols].to_string(index=False) + "\n")
+        sys.stdout.write(verdict + "\n")
+    if not n_ok:
+        sys.stderr.write(f"mvtk damping: {verdict}\n")
+        return 1
     return 0

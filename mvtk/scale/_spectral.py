@@ -308,8 +308,10 @@ def frf(
     kind = frf_kind(rq.pop(), fq.pop()) if len(rq) == 1 and len(fq) == 1 else None
     attrs = {"estimator": estimator, "excitation": "random", "fs": fs,
              "window": str(window), "noverlap": noverlap, "nperseg": int(nperseg),
-             "df_hz": fs / nperseg, "n_averages": int(full.attrs["n_averages"]),
-             "kind": kind if kind is not None else ""}
+             "nfft": int(nperseg), "df_hz": fs / nperseg, "resolution_hz": fs / nperseg,
+             "resolution_reason": "nperseg given", "n_averages": int(full.attrs["n_averages"]),
+             "kind": kind if kind is not None else "",
+             "frf_type": kind if kind is not None else "other"}
     dims = lead_dims + ("response", "reference", "frequency")
     ds = xr.Dataset({"frf": (dims, h), "coherence": (dims, coh)}, coords=coords, attrs=attrs)
     ds["frf"].attrs = dict(attrs)

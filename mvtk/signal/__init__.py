@@ -5,21 +5,25 @@ FRFs with coherence for random and impact excitation, ``find_peaks`` picks modes
 """
 
 from ._curves import AmplitudeCurves, amplitude_curves
-from ._frf import exponential_window_correction, frf, frf_kind
+from ._frf import auto_segment, exponential_window_correction, frf, frf_kind, is_impulsive
 from ._input import as_time_history, sampling_rate
-from ._peaks import PeakResult, find_peaks
+from ._peaks import MAX_PEAKS, PeakResult, find_peaks, noise_jitter_db
 from ._spectral import csd, psd
 
 __all__ = [
+    "MAX_PEAKS",
     "AmplitudeCurves",
     "PeakResult",
     "amplitude_curves",
+    "auto_segment",
     "as_time_history",
     "csd",
     "exponential_window_correction",
     "find_peaks",
     "frf",
     "frf_kind",
+    "is_impulsive",
+    "noise_jitter_db",
     "psd",
     "sampling_rate",
 ]

@@ -11,6 +11,8 @@ from ..errors import DimensionError, FormatError, ParameterError
 
 __all__ = ["AmplitudeCurves", "amplitude_curves"]
 
+# Dataset variables searched, in this order, by amplitude_curves
+_VARIABLES = ("frf", "psd", "auto_spectrum", "spectrum")
 _KINDS = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
 
 
@@ -38,6 +40,11 @@ def _check_frequency(f: np.ndarray, where: str) -> np.ndarray:
     return f
 
 
+def _frf_type(attrs: dict) -> str:
+    t = attrs.get("frf_type", "")
+    return t if t in ("receptance", "mobility", "accelerance") else ""
+
+
 def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
                      kind: str = "auto") -> AmplitudeCurves:
     """Amplitude curves from an FRF or spectrum.
@@ -46,7 +53,9 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
     ----------
     spectrum : xarray.Dataset, xarray.DataArray or array_like
         * Dataset with an ``"frf"`` variable (from :func:`mvtk.signal.frf` or
-          ``mvtk.io.read``), else a ``"psd"`` or ``"auto_spectrum"`` variable (power);
+          ``mvtk.io.read``), else a ``"psd"`` or ``"auto_spectrum"`` variable (power),
+          else a ``"spectrum"`` variable (complex: amplitude; real: power when
+          ``attrs["spectrum_type"]`` is ``"psd"`` or ``"power"``);
         * DataArray FRF, dims ``("response", "reference", "frequency")``;
         * DataArray spectrum, dims ``("channel", "frequency")`` (``attrs["spectrum"] ==
           "psd"`` marks a power spectrum);
@@ -65,16 +74,15 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
         )
     attrs: dict = {}
     if isinstance(spectrum, xr.Dataset):
-        name = next((v for v in ("frf", "psd", "auto_spectrum") if v in spectrum.data_vars),
-                    None)
+        name = next((v for v in _VARIABLES if v in spectrum.data_vars), None)
         if name is None:
             raise FormatError(
-                "expected a Dataset with an 'frf', 'psd' or 'auto_spectrum' variable, found "
-                f"{sorted(map(str, spectrum.data_vars))}"
+                f"expected a Dataset with one of the variables {list(_VARIABLES)} (an FRF or "
+                f"a spectrum), found {sorted(map(str, spectrum.data_vars))}"
             )
         attrs = dict(spectrum.attrs)
         spectrum = spectrum[name]
-        if name != "frf" and power is None:
+        if name in ("psd", "auto_spectrum") and power is None:
             power = True  # PSD / auto spectrum from mvtk.io.read: a power quantity
     if isinstance(spectrum, xr.DataArray):
         attrs = {**attrs, **spectrum.attrs}
@@ -92,13 +100,13 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
             labels = [f"{a}/{b}" for a in da["response"].values for b in da["reference"].values]
             qty = [str(q) for q in da["response_quantity"].values] \
                 if "response_quantity" in da.coords else [""] * da.sizes["response"]
-            auto = [attrs.get("kind") or _KINDS.get(q, "") for q in qty
+            auto = [attrs.get("kind") or _frf_type(attrs) or _KINDS.get(q, "") for q in qty
                     for _ in range(da.sizes["reference"])]
         elif other == ["channel"]:
             labels = [str(c) for c in da["channel"].values]
             qty = [str(q) for q in da["quantity"].values] if "quantity" in da.coords \
                 else [""] * len(labels)
-            auto = [attrs.get("kind") or _KINDS.get(q, "") for q in qty]
+            auto = [attrs.get("kind") or _frf_type(attrs) or _KINDS.get(q, "") for q in qty]
         elif other == []:
             labels = [str(spectrum.name or "spectrum")]
             auto = [attrs.get("kind", "")]
@@ -109,7 +117,9 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
             )
         vals = vals.reshape(-1, f.size)
         if power is None:
-            power = attrs.get("spectrum") in ("psd", "power")
+            power = (attrs.get("spectrum") in ("psd", "power")
+                     or attrs.get("spectrum_type") in ("psd", "power")) \
+                and not np.iscomplexobj(vals)
     else:
         if f_hz is None:
             raise ParameterError("f_hz (Hz) is required when the spectrum is a numpy array")

@@ -8,7 +8,7 @@ import numpy as np
 import scipy.fft
 import xarray as xr
 
-from ..errors import AccuracyWarning, FormatError, ParameterError
+from ..errors import AccuracyWarning, FormatError, MvtkError, ParameterError
 from ._input import as_time_history, channel_coord, sampling_rate, select_channels
 from ._spectral import (
     _pair_coords,
@@ -18,7 +18,7 @@ from ._spectral import (
     welch_segments_params,
 )
 
-__all__ = ["frf", "exponential_window_correction", "frf_kind"]
+__all__ = ["frf", "exponential_window_correction", "frf_kind", "is_impulsive"]
 
 _KINDS = {"displacement": "receptance", "velocity": "mobility", "acceleration": "accelerance"}
 
@@ -90,20 +90,27 @@ def _find_hits(force: np.ndarray, level: float, quiet: int, dead: int) -> np.nda
 
 
 def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_n):
-    level = trigger_level * np.max(np.abs(force))
+    force = force - np.median(force)  # the trigger works on the signal, not its offset
+    peak = np.max(np.abs(force))
+    level = trigger_level * peak
     if not level > 0:
         raise FormatError("reference: the force channel is all zeros; no hit to trigger on")
     quiet = max(4, int(round(0.005 * fs)))
     hits = _find_hits(force, level, quiet, force_window_n or 0)
     n = force.size
-    if nperseg is None:
-        gaps = np.diff(np.r_[hits, n])
+    auto = nperseg is None
+    if pretrigger is None:
+        # 1 % of the shortest hit-to-hit record, never more than the samples before hit 1
+        gap = int(np.min(np.diff(np.r_[hits, n])))
+        pretrigger = min(max(gap // 100, 1), int(hits[0]))
+    pretrigger = int(pretrigger)
+    if auto:
+        # the whole record: from pretrigger before a hit to pretrigger before the next
+        gaps = np.diff(np.r_[hits, n + pretrigger])
         nperseg = int(np.min(gaps))
         if nperseg < 16:
             raise FormatError(f"reference: hits are only {nperseg} samples apart")
     nperseg = int(nperseg)
-    if pretrigger is None:
-        pretrigger = max(nperseg // 100, 1)
     starts, double, short = [], [], []
     for k, h in enumerate(hits):
         s = h - pretrigger
@@ -128,7 +135,144 @@ def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_
             f"reference: no complete impact record found ({len(hits)} hit(s) above "
             f"{trigger_level:g} x peak force; nperseg={nperseg}, pretrigger={pretrigger})"
         )
-    return np.asarray(starts, dtype=int), nperseg, pretrigger
+    # pulse width: the run of samples above the trigger level that starts each hit
+    above = np.abs(force) >= level
+    widths = []
+    for s in starts:
+        h = s + pretrigger
+        e = h
+        while e < n and above[e]:
+            e += 1
+        widths.append(e - h)
+    return np.asarray(starts, dtype=int), nperseg, pretrigger, max(max(widths), 1)
+
+
+def _check_excitation(r: np.ndarray, names) -> None:
+    """Refuse a reference channel without excitation (constant or all zeros)."""
+    for name, row in zip(names, r):
+        if not np.ptp(row) > 0:
+            what = "all zeros" if row[0] == 0 else f"{row[0]:g} in every sample"
+            raise FormatError(
+                f"reference: channel {name!r} is constant ({what}): no excitation, the "
+                "FRF is undefined (0/0); check the channel choice"
+            )
+
+
+def _tail_ratio(y: np.ndarray, starts, nperseg: int, pre: int, win: np.ndarray) -> float:
+    """Largest RMS of the last 5 % of a (windowed) record over its peak, over records."""
+    m = max(nperseg // 20, 4)
+    worst = 0.0
+    for s in starts:
+        seg = y[:, s:s + nperseg] * win
+        pk = np.max(np.abs(seg[:, pre:]), axis=-1)
+        tail = np.sqrt(np.mean(seg[:, -m:] ** 2, axis=-1))
+        ok = pk > 0
+        if ok.any():
+            worst = max(worst, float(np.max(tail[ok] / pk[ok])))
+    return worst
+
+
+def _pretrigger_offset(x: np.ndarray, starts, pre: int) -> np.ndarray:
+    """Mean of the pretrigger samples of every record (offset of each channel)."""
+    return np.mean([x[:, s:s + pre].mean(axis=-1) for s in starts], axis=0)
+
+
+# impact: the FRF is trusted where the force spectrum is within this of its low-f level
+_FORCE_DROP_DB = 20.0
+
+# random excitation: search of the segment length
+_MIN_AVERAGES = 8       # fewest Welch averages (50 % overlap) the automatic choice accepts
+_LINES_TARGET = 8.0     # lines wanted across the narrowest half-power band
+_COHERENT = 0.98        # peak coherence above which averaging is not needed
+
+
+def _auto_nperseg(y, r, fs, window, detrend):
+    """Segment length of an H1 FRF under random excitation, chosen from the data.
+
+    See :func:`auto_segment`; the curves are ``|H1|`` of every response against the
+    first reference, with their coherence. Returns (nperseg, reason).
+    """
+    def curves(seg):
+        win = _window(window, seg)
+        starts = _segment_starts(y.shape[1], seg, seg // 2)
+        gyr, grr, gyy = accumulate_cross(y, r[:1], starts, seg, win, win, detrend)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h = np.abs(gyr[:, 0, :] / grr[0, 0][None, :])
+            coh = np.abs(gyr[:, 0, :]) ** 2 / (gyy * np.real(grr[0, 0])[None, :])
+        return h, coh, len(starts)
+
+    return auto_segment(y.shape[1], fs, curves)
+
+
+def auto_segment(n: int, fs: float, curves) -> tuple[int, str]:
+    """Welch segment length (power of two) that resolves the narrowest clear peak.
+
+    Starts at 32 averages (50 % overlap) and doubles the segment while the narrowest
+    peak found by :func:`mvtk.signal.find_peaks` on the summed amplitude spans fewer
+    than 8 lines between its -3 dB points and at least 8 averages remain. When the
+    coherence at the peaks (if ``curves`` gives one) is already above 0.98 with 32
+    averages (deterministic excitation such as a sine sweep, or a very clean test),
+    averaging buys nothing and the segment may grow to the whole record.
+
+    Parameters
+    ----------
+    n : int
+        Record length in samples.
+    fs : float
+        Sampling rate in Hz.
+    curves : callable
+        ``curves(nperseg) -> (amplitude (n_curves, n_freq), coherence or None,
+        n_averages)``.
+
+    Returns
+    -------
+    nperseg : int
+    reason : str
+        The choice and what limited it, in words.
+    """
+    from ._peaks import find_peaks
+
+    max_seg = int(2 ** np.floor(np.log2(2 * n / (_MIN_AVERAGES + 1))))
+    seg = int(min(max(2 ** np.floor(np.log2(2 * n / 33)), 64), max(max_seg, 16), n))
+    reason = ""
+    first = True
+    coherent = False
+    while True:
+        h, coh, n_avg = curves(seg)
+        h = np.where(np.isfinite(h), h, 0.0)
+        f = scipy.fft.rfftfreq(seg, 1 / fs)
+        lines = np.inf
+        try:
+            pk = find_peaks(h[:, 1:], f[1:], max_peaks=8)
+        except MvtkError:
+            pk = None
+        if pk is not None and len(pk):
+            amp = np.sum(h / np.maximum(h.max(axis=1, keepdims=True), 1e-300), axis=0)
+            for i in pk.index + 1:
+                lvl = amp[i] / np.sqrt(2)
+                jl = i
+                while jl > 0 and amp[jl] > lvl:
+                    jl -= 1
+                jr = i
+                while jr < amp.size - 1 and amp[jr] > lvl:
+                    jr += 1
+                lines = min(lines, jr - jl - 1)
+            if first and coh is not None and n_avg >= 16:
+                c = np.nan_to_num(np.mean(coh[:, pk.index + 1], axis=0))
+                coherent = bool(np.median(c) > _COHERENT)
+        first = False
+        limit = n if coherent else max_seg
+        reason = (f"{n_avg} average(s) of {seg} samples (df = {fs / seg:.4g} Hz); "
+                  f"narrowest peak {lines:g} lines wide at -3 dB")
+        if lines >= _LINES_TARGET or 2 * seg > limit:
+            break
+        seg *= 2
+    if coherent:
+        reason += f"; coherence at the peaks > {_COHERENT:g}: fewer averages accepted"
+    if lines < _LINES_TARGET:
+        reason += ("; the record allows no longer segment with enough averages: "
+                   "damping of the narrowest peaks is limited by resolution")
+    return seg, reason
 
 
 def frf(
@@ -137,18 +281,22 @@ def frf(
     response=None,
     *,
     estimator: str = "H1",
-    excitation: str = "random",
+    excitation: str = "auto",
     fs: float | None = None,
     window=None,
     nperseg: int | None = None,
     noverlap: int | None = None,
-    detrend="constant",
+    detrend="auto",
     trigger_level: float = 0.1,
     pretrigger: int | None = None,
-    force_window_s: float | None = None,
-    exponential_tau_s: float | None = None,
+    force_window_s="auto",
+    exponential_tau_s="auto",
+    nfft="auto",
 ) -> xr.Dataset:
     """Frequency response functions and coherence from reference and response channels.
+
+    With no options the resolution is chosen from the record and the excitation (see
+    Notes) and the choice is stated in ``attrs["resolution_reason"]``.
 
     Parameters
     ----------
@@ -157,31 +305,52 @@ def frf(
         holding both the reference (force) and response channels.
     reference : str, int, list or dict
         Reference channel(s): names, positions or a coord filter ``{"quantity": "force"}``.
+        Any quantity may be a reference (force, voltage, current ...).
     response : same kinds, optional
         Response channels; default every channel that is not a reference.
     estimator : {"H1", "H2"}
         ``H1 = G_yr G_rr^-1`` (noise on the response; several references allowed) or
         ``H2 = G_yy / G_ry`` (noise on the reference; one reference only).
-    excitation : {"random", "impact"}
+    excitation : {"auto", "random", "impact"}
         ``"random"``: Welch averaging over overlapping segments (default Hann window).
-        ``"impact"``: one record of ``nperseg`` samples per hit, found by a trigger on
-        the first reference channel at ``trigger_level`` x its peak (in the polarity of
-        the largest sample; crossings less than max(4 samples, 5 ms) after the force
-        fell below the level, e.g. anti-alias ringing, belong to the same hit), starting
-        ``pretrigger`` samples before the crossing (default 1 % of the record); records
-        with a second hit are rejected with an :class:`~mvtk.errors.AccuracyWarning`.
-        Default window is rectangular and ``detrend=False``.
+        ``"impact"``: one record per hit, found by a trigger on the first reference
+        channel at ``trigger_level`` x its peak (in the polarity of the largest sample;
+        crossings less than max(4 samples, 5 ms) after the force fell below the level,
+        e.g. anti-alias ringing, belong to the same hit), starting ``pretrigger``
+        samples before the crossing (default 1 % of the record, at most the samples
+        before the first hit); records with a second hit are rejected with an
+        :class:`~mvtk.errors.AccuracyWarning`. Default window is rectangular.
+        ``"auto"``: impact when the first reference is a pulse (99 % of its energy in
+        less than 2 % of the record), random otherwise.
     fs : float, optional
         Sampling rate in Hz (derived from ``time`` and checked if given).
-    window, nperseg, noverlap, detrend
+    window, noverlap
         As in :func:`scipy.signal.csd` (random excitation).
-    force_window_s : float, optional
+    nperseg : int, optional
+        Segment (random) or record (impact) length in samples. Default: chosen from the
+        data (see Notes).
+    detrend : {"auto", "constant", "linear", False}
+        Random: as in :func:`scipy.signal.csd` (``"auto"`` = ``"constant"``). Impact:
+        ``"auto"`` subtracts the median of the whole record from each reference (a
+        hammer force is zero between pulses) and the mean of the pretrigger samples
+        from each response (when there are at least 8 of them).
+    force_window_s : float, "auto" or None
         Impact only: keep the force from the record start to ``force_window_s`` after
         the trigger and zero it afterwards (removes noise from the force channel).
-    exponential_tau_s : float, optional
+        ``"auto"``: 4 x the measured pulse width (at least 8 samples); None: no window.
+    exponential_tau_s : float, "auto" or None
         Impact only: multiply force and response records by ``exp(-(t - t_trigger)/tau)``
         after the trigger. The added damping is recorded in ``attrs`` and removed by
         :func:`mvtk.damping.half_power` (see :func:`exponential_window_correction`).
+        ``"auto"``: applied only when the response has not decayed to 1 % of its peak
+        (RMS of the last 5 % of the record), with the longest ``tau`` that brings the
+        tail to 1 %; None: never.
+    nfft : int, "auto" or None
+        Impact only: FFT length (zero padding of each record). ``"auto"``: when
+        ``nperseg`` was chosen automatically and the (windowed) response decays to 1 %
+        within the record, the record is zero-padded to the next power of two >= 8 x its
+        length; the lines then interpolate the spectrum of the complete transient (the
+        frequency resolution stays ``1 / record``, stated as ``attrs["resolution_hz"]``).
 
     Returns
     -------
@@ -189,14 +358,33 @@ def frf(
         ``frf``: complex, dims ``("response", "reference", "frequency")`` in
         response units per reference unit (``units`` coord); ``coherence``: ordinary
         coherence ``|G_yr|^2 / (G_yy G_rr)`` per pair. ``attrs`` record the estimator,
-        excitation, ``n_averages``, ``nperseg``, ``df_hz``, ``window``, ``kind``
-        (receptance/mobility/accelerance when all responses share one quantity) and
-        ``exponential_window_tau_s`` when applied.
+        excitation, ``n_averages``, ``nperseg``, ``nfft``, ``df_hz`` (line spacing),
+        ``resolution_hz`` (``fs / nperseg``), ``resolution_reason``, ``window``,
+        ``kind`` / ``frf_type`` (receptance/mobility/accelerance when all responses share
+        one quantity and the reference is a force), ``tail_ratio`` (impact),
+        ``excitation_band_hz`` (impact: where the force spectrum is within 20 dB of its
+        low-frequency level; peak picking stays inside it by default) and
+        ``exponential_window_tau_s`` (also ``exp_window_tau_s``) when applied.
+
+    Raises
+    ------
+    mvtk.errors.FormatError
+        A reference channel is constant (no excitation) or no impact record is complete.
+
+    Notes
+    -----
+    Impact tests: the default record is the whole time between hits, a force window
+    removes the force channel's noise after the pulse, an exponential window is added
+    only if the response would leak, and its damping is removed exactly by
+    :func:`mvtk.damping.half_power`. Random tests: the segment length starts at 32
+    averages and doubles until the narrowest clear peak spans 8 lines at -3 dB, keeping
+    at least 8 averages (50 % overlap); ``resolution_reason`` says what limited it.
     """
     if estimator not in ("H1", "H2"):
         raise ParameterError(f"estimator must be 'H1' or 'H2', got {estimator!r}")
-    if excitation not in ("random", "impact"):
-        raise ParameterError(f"excitation must be 'random' or 'impact', got {excitation!r}")
+    if excitation not in ("auto", "random", "impact"):
+        raise ParameterError(
+            f"excitation must be 'auto', 'random' or 'impact', got {excitation!r}")
     x = as_time_history(x)
     fs = sampling_rate(x, fs)
     ref = select_channels(x, reference, name="reference")
@@ -214,47 +402,93 @@ def frf(
     n = x.sizes["time"]
     y = resp.values.astype(float, copy=False)
     r = ref.values.astype(float, copy=False)
+    _check_excitation(r, ref_names)
+    if excitation == "auto":
+        excitation = "impact" if is_impulsive(r[0]) else "random"
     attrs = {"estimator": estimator, "excitation": excitation, "fs": fs}
+    auto_seg = nperseg is None
 
     if excitation == "random":
-        if force_window_s is not None or exponential_tau_s is not None:
-            raise ParameterError(
-                "force_window_s and exponential_tau_s apply to excitation='impact' only"
-            )
+        for key, val in (("force_window_s", force_window_s),
+                         ("exponential_tau_s", exponential_tau_s), ("nfft", nfft)):
+            if val not in ("auto", None):
+                raise ParameterError(f"{key}: force_window_s, exponential_tau_s and nfft "
+                                     "apply to excitation='impact' only")
+        detrend = "constant" if detrend == "auto" else detrend
+        window = "hann" if window is None else window
+        if auto_seg:
+            nperseg, reason = _auto_nperseg(y, r, fs, window, detrend)
+        else:
+            reason = "nperseg given"
         nperseg, noverlap, window = welch_segments_params(n, fs, nperseg, noverlap, window)
         win = _window(window, nperseg)
         starts = _segment_starts(n, nperseg, noverlap)
         gyr, grr, gyy = accumulate_cross(y, r, starts, nperseg, win, win, detrend)
         attrs.update(window=str(window), noverlap=noverlap)
+        nfft_used = nperseg
     else:
         if noverlap is not None:
             raise ParameterError("noverlap applies to excitation='random' only")
         window = "boxcar" if window is None else window
-        detrend = False if detrend == "constant" else detrend
+        starts, nperseg, pre, width = _impact_records(
+            r[0], nperseg, pretrigger, trigger_level, fs,
+            None if force_window_s in ("auto", None) else
+            int(round(_positive(force_window_s, "force_window_s") * fs)))
         fw_n = None
-        if force_window_s is not None:
-            if not (np.isfinite(force_window_s) and force_window_s > 0):
-                raise ParameterError(f"force_window_s must be > 0 s, got {force_window_s!r}")
-            fw_n = int(round(force_window_s * fs))
-        starts, nperseg, pre = _impact_records(r[0], nperseg, pretrigger, trigger_level, fs,
-                                               fw_n)
+        if force_window_s == "auto":
+            fw_n = min(max(4 * width, 8), nperseg - pre)
+            force_window_s = fw_n / fs
+        elif force_window_s is not None:
+            fw_n = int(round(_positive(force_window_s, "force_window_s") * fs))
+        if detrend == "auto":
+            # a hammer force is zero outside its pulses: its offset is the median
+            r = r - np.median(r, axis=-1, keepdims=True)
+            attrs["offset_removed"] = "force: median of the record"
+            if pre >= 8:
+                y = y - _pretrigger_offset(y, starts, pre)[:, None]
+                attrs["offset_removed"] += "; response: pretrigger mean"
+            detrend = False
         win = _window(window, nperseg)
         win_y = win.copy()
         win_r = win.copy()
+        tail = _tail_ratio(y, starts, nperseg, pre, win)
+        attrs["tail_ratio"] = tail
+        if exponential_tau_s == "auto":
+            exponential_tau_s = None
+            if tail > 0.01:
+                # reach 1 % where the tail measurement starts (5 % before the end)
+                span = nperseg - pre - max(nperseg // 20, 4)
+                exponential_tau_s = span / fs / np.log(tail / 0.01)
         if exponential_tau_s is not None:
-            if not (np.isfinite(exponential_tau_s) and exponential_tau_s > 0):
-                raise ParameterError(
-                    f"exponential_tau_s must be > 0 s, got {exponential_tau_s!r}"
-                )
+            _positive(exponential_tau_s, "exponential_tau_s")
             k = np.arange(nperseg)
             expo = np.exp(-np.clip(k - pre, 0, None) / (exponential_tau_s * fs))
             win_y *= expo
             win_r *= expo
             attrs["exponential_window_tau_s"] = float(exponential_tau_s)
+            attrs["exp_window_tau_s"] = float(exponential_tau_s)
+            tail = _tail_ratio(y, starts, nperseg, pre, win_y)
         if fw_n is not None:
             win_r[pre + fw_n:] = 0.0
             attrs["force_window_s"] = float(force_window_s)
-        gyr, grr, gyy = accumulate_cross(y, r, starts, nperseg, win_y, win_r, detrend)
+        if nfft == "auto":
+            nfft_used = nperseg
+            if auto_seg and tail <= 0.011:
+                nfft_used = int(2 ** np.ceil(np.log2(8 * nperseg)))
+        elif nfft is None:
+            nfft_used = nperseg
+        else:
+            nfft_used = int(nfft)
+            if nfft_used < nperseg:
+                raise ParameterError(f"nfft must be >= nperseg = {nperseg}, got {nfft}")
+        reason = ("record length given" if not auto_seg else
+                  f"whole record between hits ({nperseg} samples = {nperseg / fs:.4g} s)")
+        if nfft_used > nperseg:
+            reason += f", zero-padded to {nfft_used} (complete transient)"
+        if "exponential_window_tau_s" in attrs:
+            reason += f", exponential window tau = {attrs['exponential_window_tau_s']:.4g} s"
+        gyr, grr, gyy = accumulate_cross(y, r, starts, nperseg, win_y, win_r, detrend,
+                                         nfft=nfft_used)
         attrs.update(window=str(window), pretrigger=int(pre),
                      hit_times_s=[float((s + pre) / fs) for s in starts])
 
@@ -271,7 +505,13 @@ def frf(
         else:
             h = gyy[:, None, :] / np.conj(gyr)
         coh = np.abs(gyr) ** 2 / (gyy[:, None, :] * grr_diag[None, :, :])
-    f = scipy.fft.rfftfreq(nperseg, 1 / fs)
+    f = scipy.fft.rfftfreq(nfft_used, 1 / fs)
+    if excitation == "impact":
+        # usable band of a hammer: force spectrum within 20 dB of its low-frequency level
+        g = grr_diag[0]
+        ref_level = np.median(g[1:max(int(0.02 * g.size), 3)])
+        low = np.flatnonzero(g[1:] < ref_level * 10 ** (-_FORCE_DROP_DB / 10))
+        attrs["excitation_band_hz"] = [0.0, float(f[low[0] + 1]) if low.size else float(f[-1])]
     coords = _pair_coords(resp, ref, f)
     ru = channel_coord(resp, "units")
     fu = channel_coord(ref, "units")
@@ -280,8 +520,10 @@ def frf(
     rq = set(channel_coord(resp, "quantity"))
     fq = set(channel_coord(ref, "quantity"))
     kind = frf_kind(rq.pop(), fq.pop()) if len(rq) == 1 and len(fq) == 1 else None
-    attrs.update(nperseg=int(nperseg), df_hz=fs / nperseg, n_averages=len(starts),
-                 kind=kind if kind is not None else "")
+    attrs.update(nperseg=int(nperseg), nfft=int(nfft_used), df_hz=fs / nfft_used,
+                 resolution_hz=fs / nperseg, resolution_reason=reason,
+                 n_averages=len(starts), kind=kind if kind is not None else "",
+                 frf_type=kind if kind is not None else "other")
     ds = xr.Dataset(
         {"frf": (("response", "reference", "frequency"), h),
          "coherence": (("response", "reference", "frequency"), np.clip(coh, 0.0, 1.0))},
@@ -289,3 +531,32 @@ def frf(
     )
     ds["frf"].attrs = dict(attrs)
     return ds
+
+
+def _positive(value, name: str) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} must be a number of seconds > 0, got {value!r}") from None
+    if not (np.isfinite(v) and v > 0):
+        raise ParameterError(f"{name} must be > 0 s, got {value!r}")
+    return v
+
+
+def is_impulsive(force: np.ndarray) -> bool:
+    """True when ``force`` looks like hammer hits rather than continuous excitation.
+
+    The test behind ``excitation="auto"`` of :func:`frf`: after removing the median
+    (offset), the peak exceeds 8 x the robust noise level (1.4826 x median absolute
+    deviation) and fewer than 2 % of the samples exceed 20 % of the peak. Gaussian
+    random force has a peak of ~4-5 standard deviations; a sine sweep spreads its
+    energy over the whole record.
+    """
+    f = np.asarray(force, dtype=float)
+    f = f - np.median(f)
+    peak = np.max(np.abs(f))
+    if not peak > 0:
+        return False
+    noise = 1.4826 * np.median(np.abs(f))
+    busy = np.count_nonzero(np.abs(f) > 0.2 * peak)
+    return bool(peak > 8 * noise and busy < 0.02 * f.size)

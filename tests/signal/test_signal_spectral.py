@@ -116,7 +116,7 @@ def test_exponential_window_is_corrected(rng):
     d = frf(x, "force", excitation="impact", nperseg=1900, pretrigger=20, exponential_tau_s=tau)
     assert d.attrs["exponential_window_tau_s"] == tau
     with pytest.warns(ResolutionWarning):  # 2.4 lines across the (window-widened) band
-        hp = half_power(d, fn_hz=[fn])
+        hp = half_power(d, fn_hz=[fn], method="interpolate")
     assert hp.zeta[0] == pytest.approx(zeta, rel=0.03)
     with pytest.warns(ResolutionWarning):
         raw = half_power(d, fn_hz=[fn], exponential_tau_s=None)
@@ -200,3 +200,23 @@ def test_find_peaks_free_free_beam(shared_data):
     h = np.loadtxt(shared_data / "uff" / "meas_point_1.txt", dtype=complex)
     pk = find_peaks(h, np.arange(h.size, dtype=float), n_peaks=6)
     np.testing.assert_allclose(pk.fn_hz, [52, 142, 279, 460, 687, 959], atol=1.0)
+
+
+def test_psd_auto_segment_resolves_the_mode():
+    # issue 14: a fixed 256-sample default gives 2 Hz lines for a 0.2 Hz wide mode
+    rng = np.random.default_rng(2)
+    x = T.random_excitation_test([20.0], [0.005], 512.0, 400.0, rng).isel(channel=[1])
+    p = psd(x)
+    band = 2 * 0.005 * 20.0
+    assert band / p.attrs["df_hz"] >= 5 and p.attrs["n_averages"] >= 8
+    assert "narrowest peak" in p.attrs["resolution_reason"]
+    assert psd(x, nperseg=None).attrs["nperseg"] == 256  # scipy's default on request
+
+
+def test_find_peaks_ignores_nan_lines():
+    f = np.linspace(0, 100, 2001)
+    h = np.abs(T.modal_frf(f, [40.0], [0.02]).values[0, 0])
+    h[0] = np.nan  # 0/0 at 0 Hz of an H1 FRF
+    assert find_peaks(h, f).fn_hz == pytest.approx([40.0], rel=1e-3)
+    with pytest.raises(FormatError, match="no finite value"):
+        find_peaks(np.full(10, np.nan), np.arange(10.0))
