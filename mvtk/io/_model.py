@@ -165,7 +165,8 @@ def _per_channel(value, n: int, name: str, default) -> list:
     values = list(value)
     if len(values) != n:
         raise DimensionError(
-            f"{name}: expected one entry per channel ({n}), got {len(values)}: {values!r}"
+            f"{name}: expected one entry per channel ({n}), got {len(values)}: "
+            f"{[str(v) for v in values]}"
         )
     return values
 

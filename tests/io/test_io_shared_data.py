@@ -128,15 +128,45 @@ def test_mat_case_files(shared_data):
     th = ds["time_history"]
     assert th.shape == (2, 4096) and th.attrs["fs"] == 1280.0
     frf = ds["frf"]
-    assert frf.shape == (1, 1601)
+    assert frf.dims == ("response", "reference", "frequency")  # docs/conventions.md
+    assert frf.shape == (1, 1, 1601)
+    assert ds["coherence"].dims == frf.dims  # shares the FRF axes (no response_2)
     np.testing.assert_allclose(np.diff(frf.frequency.values[:3]), 0.3125)
     f = frf.frequency.values
     band = (f > 150) & (f < 250)
-    assert f[band][np.argmax(np.abs(frf.values[0, band]))] == pytest.approx(212.2, abs=1.0)
+    assert f[band][np.argmax(np.abs(frf.values[0, 0, band]))] == pytest.approx(212.2, abs=1.0)
     ds2 = mio.read(shared_data / "mat" / "case2.mat", **MAT_OPTS)
     f2 = ds2["frf"].frequency.values
     band = (f2 > 150) & (f2 < 250)
-    assert f2[band][np.argmax(np.abs(ds2["frf"].values[0, band]))] == pytest.approx(192.5, abs=1.0)
+    peak = f2[band][np.argmax(np.abs(ds2["frf"].values[0, 0, band]))]
+    assert peak == pytest.approx(192.5, abs=1.0)
+
+
+def test_mat_case_frf_only_and_channels_named(shared_data):
+    """Issue 14: FRF without time histories; spectra on 'channel', never 'channel_2'."""
+    path = shared_data / "mat" / "case1.mat"
+    ds = mio.read(
+        path,
+        frequency="Freq_domain",
+        spectra={"frf": "Hf_chan_2", "coherence": "Hf_coh_chan_2"},
+        spectrum_units={"frf": "m/s^2/N"},
+    )
+    frf = ds["frf"]
+    assert frf.shape == (1, 1, 1601) and "time_history" not in ds
+    assert frf.attrs["frf_type"] == "accelerance"
+    assert list(frf.units.values) == ["m/s^2"] and list(frf.reference_units.values) == ["N"]
+    assert frf.frequency.values[1] == 0.3125 and frf.frequency.size == 1601
+    both = mio.read(
+        path,
+        **MAT_OPTS | {"spectra": {"frf": "Hf_chan_2", "psd": ["PSD_chan_1", "PSD_chan_2"]}},
+        response="Time_chan_2",
+        reference="Time_chan_1",
+    )
+    assert both["psd"].dims == ("channel", "frequency")
+    assert not any(str(d).endswith("_2") for d in both.dims)
+    assert list(both["frf"].response_quantity.values) == ["acceleration"]
+    assert list(both["frf"].reference_quantity.values) == ["force"]
+    assert both["frf"].attrs["frf_type"] == "accelerance"
 
 
 def test_mat_without_data_option_names_variables(shared_data):
