@@ -692,16 +692,17 @@ def _read_whole(path, n_fields, options, trailing=False):
     the result is the same as the chunked path's.
     """
     try:
-        df = pd.read_csv(path, dtype=np.float64, **options)
-    except (ValueError, TypeError, pd.errors.ParserError):
+        df = pd.read_csv(path, **options)  # dtype=float64 here costs ~40 % more CPU
+        if df.shape[1] != n_fields + bool(trailing):
+            return None, 0, False
+        if trailing and not df.iloc[:, -1].isna().all():
+            return None, 0, False
+        # a view of pandas' float64 block (a copy only if some column parsed as int)
+        block = df.to_numpy(dtype=np.float64, copy=False).T[:n_fields]
+    except (ValueError, TypeError, pd.errors.ParserError):  # text in a numeric column
         return None, 0, False
     except pd.errors.EmptyDataError:
         return np.empty((n_fields, 0)), 0, False
-    if df.shape[1] != n_fields + bool(trailing):
-        return None, 0, False
-    if trailing and not df.iloc[:, -1].isna().all():
-        return None, 0, False
-    block = df.to_numpy(dtype=np.float64, copy=False).T[:n_fields]  # a view of pandas' block
     if not block.flags.c_contiguous:
         block = np.ascontiguousarray(block)
     del df
