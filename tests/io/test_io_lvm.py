@@ -302,3 +302,13 @@ def test_mutated_lvm_gives_data_or_mvtk_error(pos, cut, insert):
     except MvtkError:
         return
     mio.validate(ds)
+
+
+def test_frequency_x_dimension_gives_a_spectrum(tmp_path, signal):
+    path = _lvm(tmp_path, np.abs(signal), dt=0.5)
+    path.write_text(path.read_text().replace("X_Dimension\tTime\tTime", "X_Dimension\tHz\tHz"))
+    ds = mio.read(path)
+    spec = ds["spectrum"]
+    assert spec.dims == ("channel", "frequency") and "time_history" not in ds
+    np.testing.assert_allclose(spec.frequency.values[:3], [0.0, 0.5, 1.0])
+    np.testing.assert_array_equal(spec.values, np.abs(signal))

@@ -249,3 +249,14 @@ def test_round_trip_netcdf_identical(shared_data, tmp_path, rel, options):
     xr.testing.assert_identical(_without_provenance(first), _without_provenance(second))
     for name in first.variables:
         assert first[name].dtype == second[name].dtype, name
+
+
+def test_mat_frf_feeds_half_power(shared_data):
+    """Issue 14 symptom: half_power rejected the MAT reader's output (dim 'channel_2')."""
+    import mvtk.damping as md
+
+    ds = mio.read(shared_data / "mat" / "case1.mat", **MAT_OPTS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = md.half_power(ds["frf"], fn_hz=[212.1])
+    assert res.fn_hz[0] == pytest.approx(212.09, abs=0.3)  # source project's fit: 212.0925
