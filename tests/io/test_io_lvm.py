@@ -312,3 +312,23 @@ def test_frequency_x_dimension_gives_a_spectrum(tmp_path, signal):
     assert spec.dims == ("channel", "frequency") and "time_history" not in ds
     np.testing.assert_allclose(spec.frequency.values[:3], [0.0, 0.5, 1.0])
     np.testing.assert_array_equal(spec.values, np.abs(signal))
+
+
+@pytest.mark.parametrize("xcols", ["No", "One"])
+def test_file_and_memory_parse_paths_agree(tmp_path, signal, monkeypatch, xcols):
+    import mvtk.io._lvm as lvm
+
+    path = _lvm(tmp_path, signal, xcols=xcols, dec=",", segments=2)
+    memory = mio.read(path)
+    calls = []
+    real = lvm._WholeFile.parse
+    monkeypatch.setattr(lvm._WholeFile, "MIN_BYTES", 0)
+    monkeypatch.setattr(lvm._WholeFile, "parse", lambda *a: calls.append(1) or real(*a))
+    from_file = mio.read(path)
+    assert calls  # the last segment runs to the end of the file
+    xr.testing.assert_identical(memory, from_file)
+    lines = path.read_text().splitlines()
+    lines[-3] = "\tNA\t1,0"  # not a number in an LVM file: the line is named on both paths
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FormatError, match=rf"line {len(lines) - 2}: column 2 \('acc'\) = 'NA'"):
+        mio.read(path)
