@@ -111,6 +111,56 @@ def _number(token: str, decimal: str, what: str, path: Path, line_no: int) -> fl
     return float(t)
 
 
+class _Lines:
+    """The lines of a UTF-8 buffer, decoded on demand; vectorised line and field scans."""
+
+    def __init__(self, buf: bytes):
+        self.buf = buf
+        arr = np.frombuffer(buf, dtype=np.uint8)
+        nl = np.flatnonzero(arr == 10)
+        ends = np.append(nl, len(buf))
+        starts = np.concatenate(([0], nl + 1))
+        if len(buf) and buf.endswith(b"\n"):  # no empty line after the last newline
+            ends, starts = ends[:-1], starts[:-1]
+        self.starts, self.ends = starts, ends
+        first = np.full(len(starts), 10, dtype=np.uint8)  # first byte (10 when empty)
+        inside = starts < len(arr)
+        first[inside] = arr[starts[inside]]
+        alpha = ((first >= 65) & (first <= 90)) | ((first >= 97) & (first <= 122))
+        self.alpha = np.flatnonzero(alpha)  # lines that may start a segment header
+        self._arr = arr
+        self._seps: dict[str, np.ndarray] = {}
+
+    def __len__(self) -> int:
+        return len(self.starts)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        return self.buf[self.starts[i] : self.ends[i]].decode("utf-8")
+
+    def next_alpha(self, i: int) -> np.ndarray:
+        """Indices >= i of lines starting with an ASCII letter."""
+        return self.alpha[np.searchsorted(self.alpha, i) :]
+
+    def sep_counts(self, first: int, stop: int, sep: str) -> np.ndarray:
+        """Number of separators on each line of [first, stop)."""
+        if len(sep.encode("utf-8")) != 1:
+            return np.fromiter((self[i].count(sep) for i in range(first, stop)), np.int64)
+        if sep not in self._seps:
+            self._seps[sep] = np.flatnonzero(self._arr == ord(sep))
+        pos = self._seps[sep]
+        return np.searchsorted(pos, self.ends[first:stop]) - np.searchsorted(
+            pos, self.starts[first:stop]
+        )
+
+    def text(self, first: int, stop: int) -> str:
+        """Lines [first, stop) joined by newlines."""
+        if stop <= first:
+            return ""
+        return self.buf[self.starts[first] : self.ends[stop - 1]].decode("utf-8")
+
+
 class _Segment:
     """Header values, column names and the data-line range of one segment."""
 
@@ -122,7 +172,7 @@ class _Segment:
         self.first = self.stop = 0  # data lines [first, stop) as 0-based line indices
 
 
-def _split_header(lines: list[str], path: Path, sep: str):
+def _split_header(lines: _Lines, path: Path, sep: str):
     """File header dict and the list of segments with their line ranges."""
     file_header: dict[str, tuple[int, list[str]]] = {}
     n = len(lines)
@@ -173,12 +223,11 @@ def _split_header(lines: list[str], path: Path, sep: str):
             seg.names = [f.strip() for f in lines[i].split(sep)]
             i += 1
         seg.first = i
-        while i < n:
-            line = lines[i]
-            head = line.split(sep, 1)[0].strip()
-            if head and _key(head) in _SEGMENT_KEYS:
+        i = n
+        for k in lines.next_alpha(seg.first):  # data lines start with a number or a separator
+            if _key(lines[int(k)].split(sep, 1)[0]) in _SEGMENT_KEYS:
+                i = int(k)
                 break
-            i += 1
         seg.stop = i
         while seg.stop > seg.first and not lines[seg.stop - 1].strip(sep + " \r"):
             seg.stop -= 1
@@ -326,18 +375,22 @@ def read_lvm(
     if decimal is not None and decimal not in (".", ","):
         raise ParameterError(f"read({path}): decimal={decimal!r}; expected '.' or ','")
     raw = path.read_bytes()
-    text = _decode(raw, encoding, path)
-    utf8 = encoding is None and not raw.startswith(b"\xef\xbb\xbf")
+    plain = encoding is None and not raw.startswith(b"\xef\xbb\xbf") and b"\r" not in raw
+    if plain:
+        try:
+            raw.decode("utf-8")  # validity only: lines are decoded on demand
+        except UnicodeDecodeError:
+            plain = False
+    if plain:  # the common case: the file's bytes are the buffer (pandas can read the file)
+        lines = _Lines(raw)
+    else:
+        text = _decode(raw, encoding, path).replace("\r\n", "\n")
+        if "\r" in text:  # lone carriage returns end lines too
+            text = "\n".join(text.splitlines())
+        lines = _Lines(text.encode("utf-8"))
+        del text
     del raw
-    if "\r" in text:
-        text = text.replace("\r\n", "\n")
-    # line numbers as pandas counts them (only \n ends a line) unless a lone \r remains
-    file_lines = "\r" not in text
-    lines = text.split("\n") if file_lines else text.splitlines()
-    del text
-    if lines and lines[-1] == "":
-        lines.pop()
-    whole = _WholeFile(path, len(lines), file_lines and utf8)
+    whole = _WholeFile(path, len(lines), plain)
     sep = "\t"
     for ln in lines[:64]:
         if ln.startswith("Separator") and len(ln) > len("Separator"):
@@ -539,9 +592,7 @@ def _read_segment(
         seen[nm] = k
     n_cols = max(xpos + ypos) + 1
     # every data line has n_cols fields, or one more (Comment text / trailing separator)
-    counts = np.fromiter(
-        (lines[i].count(sep) for i in range(seg.first, seg.stop)), np.int64, seg.stop - seg.first
-    )
+    counts = lines.sep_counts(seg.first, seg.stop, sep)
     bad = np.flatnonzero((counts != n_cols - 1) & (counts != n_cols))
     if bad.size:
         i = seg.first + int(bad[0])
@@ -561,10 +612,13 @@ def _read_segment(
     has_comment = bool((counts == n_cols).any())
     arr = None if has_comment else whole.parse(seg, sep, dec, n_cols, cols)
     if arr is None:
-        block = lines[seg.first : seg.stop]
         if has_comment:  # some lines carry a Comment (or a trailing separator)
+            block = lines[seg.first : seg.stop]
             block = [ln.rsplit(sep, 1)[0] if c == n_cols else ln for ln, c in zip(block, counts)]
-        arr = _parse_block("\n".join(block), sep, dec, cols, n_cols)
+            block_text = "\n".join(block)
+        else:
+            block_text = lines.text(seg.first, seg.stop)
+        arr = _parse_block(block_text, sep, dec, cols, n_cols)
     if arr is None or arr.shape[1] != seg.stop - seg.first:
         _diagnose(lines, seg, sep, dec, cols, col_names, path)
     data = arr[[cols.index(k) for k in ypos]]
