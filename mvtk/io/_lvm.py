@@ -129,7 +129,6 @@ class _Lines:
         alpha = ((first >= 65) & (first <= 90)) | ((first >= 97) & (first <= 122))
         self.alpha = np.flatnonzero(alpha)  # lines that may start a segment header
         self._arr = arr
-        self._seps: dict[str, np.ndarray] = {}
 
     def __len__(self) -> int:
         return len(self.starts)
@@ -147,9 +146,10 @@ class _Lines:
         """Number of separators on each line of [first, stop)."""
         if len(sep.encode("utf-8")) != 1:
             return np.fromiter((self[i].count(sep) for i in range(first, stop)), np.int64)
-        if sep not in self._seps:
-            self._seps[sep] = np.flatnonzero(self._arr == ord(sep))
-        pos = self._seps[sep]
+        if stop <= first:
+            return np.zeros(0, dtype=np.int64)
+        lo, hi = int(self.starts[first]), int(self.ends[stop - 1])
+        pos = np.flatnonzero(self._arr[lo:hi] == ord(sep)) + lo
         return np.searchsorted(pos, self.ends[first:stop]) - np.searchsorted(
             pos, self.starts[first:stop]
         )
@@ -591,28 +591,32 @@ def _read_segment(
             )
         seen[nm] = k
     n_cols = max(xpos + ypos) + 1
-    # every data line has n_cols fields, or one more (Comment text / trailing separator)
-    counts = lines.sep_counts(seg.first, seg.stop, sep)
-    bad = np.flatnonzero((counts != n_cols - 1) & (counts != n_cols))
-    if bad.size:
-        i = seg.first + int(bad[0])
-        got = int(counts[bad[0]]) + 1
-        layout = ", ".join(
-            ["X_Value" if k in xpos else names[ypos.index(k)] for k in range(n_cols)]
-        )
-        raise FormatError(
-            f"{path}, line {i + 1}: {got} fields; expected {n_cols} ({layout})"
-            + (" plus an optional Comment" if comment else "")
-            + f" as in segment {seg.index}"
-            + (f" (column names at line {seg.names_line})" if seg.names_line else "")
-            + ("; missing columns" if got < n_cols else "; extra columns")
-        )
     cols = sorted(xpos + ypos)
     col_names = ["X_Value" if k in xpos else names[ypos.index(k)] for k in cols]
-    has_comment = bool((counts == n_cols).any())
-    arr = None if has_comment else whole.parse(seg, sep, dec, n_cols, cols)
+    y_rows = [cols.index(k) for k in ypos]
+    # fast path for large files: one pandas pass over the file; accepted only when every
+    # line was complete (a short line or a gap gives NaN: the checks below name the line)
+    arr = whole.parse(seg, sep, dec, n_cols, cols)
+    if arr is not None and np.isnan(arr[y_rows]).any():
+        arr = None
     if arr is None:
-        if has_comment:  # some lines carry a Comment (or a trailing separator)
+        # every data line has n_cols fields, or one more (Comment text / trailing separator)
+        counts = lines.sep_counts(seg.first, seg.stop, sep)
+        bad = np.flatnonzero((counts != n_cols - 1) & (counts != n_cols))
+        if bad.size:
+            i = seg.first + int(bad[0])
+            got = int(counts[bad[0]]) + 1
+            layout = ", ".join(
+                ["X_Value" if k in xpos else names[ypos.index(k)] for k in range(n_cols)]
+            )
+            raise FormatError(
+                f"{path}, line {i + 1}: {got} fields; expected {n_cols} ({layout})"
+                + (" plus an optional Comment" if comment else "")
+                + f" as in segment {seg.index}"
+                + (f" (column names at line {seg.names_line})" if seg.names_line else "")
+                + ("; missing columns" if got < n_cols else "; extra columns")
+            )
+        if (counts == n_cols).any():  # some lines carry a Comment (or a trailing separator)
             block = lines[seg.first : seg.stop]
             block = [ln.rsplit(sep, 1)[0] if c == n_cols else ln for ln, c in zip(block, counts)]
             block_text = "\n".join(block)

@@ -332,3 +332,7 @@ def test_file_and_memory_parse_paths_agree(tmp_path, signal, monkeypatch, xcols)
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(FormatError, match=rf"line {len(lines) - 2}: column 2 \('acc'\) = 'NA'"):
         mio.read(path)
+    lines[-3] = lines[-4].rsplit("\t", 1)[0]  # a short line near the end of the file
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.raises(FormatError, match=rf"line {len(lines) - 2}: 2 fields; expected 3"):
+        mio.read(path)
