@@ -4,7 +4,9 @@
 1. CSV: a DAQ-style export (metadata lines, time column, units in the header) of
    16 channels x 10 min x 10 kHz (96 M samples, ~1.2 GB of text) read by
    ``mvtk.io.read`` and by ``pandas.read_csv`` (C parser) on the same file.
-2. UFF 58b: 16 binary float64 records read by ``mvtk.io.read`` and by plain
+2. LVM: a LabVIEW Measurement file (tabs, decimal commas) read by ``mvtk.io.read`` and
+   by ``pandas.read_csv`` with the header lines skipped.
+3. UFF 58b: 16 binary float64 records read by ``mvtk.io.read`` and by plain
    ``pyuff.UFF(path).read_sets()``.
 
 Every read runs in a fresh subprocess so its peak resident memory (ru_maxrss minus the
@@ -68,6 +70,14 @@ def worker(kind: str, path: str) -> None:
     elif kind == "csv-pandas":
         df = pd.read_csv(path, skiprows=HEADER_LINES, header=0, engine="c")
         n = df.shape[0] * (df.shape[1] - 1)
+    elif kind == "lvm-mvtk":
+        ds = mvtk.io.read(path)
+        n = ds["time_history"].size
+    elif kind == "lvm-pandas":
+        df = pd.read_csv(
+            path, sep="\t", decimal=",", skiprows=LVM_HEADER_LINES, header=None, engine="c"
+        )
+        n = df.shape[0] * (df.shape[1] - 1)
     elif kind == "uff-mvtk":
         ds = mvtk.io.read(path)
         n = ds["time_history"].size
@@ -104,6 +114,40 @@ def write_csv(path: Path, n_ch: int, fs: float, n: int, rng: np.random.Generator
             block[:, 0] = (start + np.arange(m)) / fs
             block[:, 1:] = rng.standard_normal((m, n_ch))
             np.savetxt(fh, block, fmt=fmt)
+
+
+LVM_HEADER_LINES = 23  # file header, blank line, segment header, column names
+
+
+def write_lvm(path: Path, n_ch: int, fs: float, n: int, rng: np.random.Generator) -> None:
+    """LabVIEW Measurement file as LabVIEW writes it: tabs, decimal commas, empty X column."""
+    t = "\t"
+    head = [
+        "LabVIEW Measurement\t", "Writer_Version\t2", "Reader_Version\t2", "Separator\tTab",
+        "Decimal_Separator\t,", "Multi_Headings\tYes", "X_Columns\tNo", "Time_Pref\tAbsolute",
+        "Operator\tbench", "Date\t2026/01/01", "Time\t10:00:00", "***End_of_Header***\t", "\t",
+        t.join(["Channels", str(n_ch)]) + t,
+        t.join(["Samples"] + [str(n)] * n_ch) + t,
+        t.join(["Date"] + ["2026/01/01"] * n_ch) + t,
+        t.join(["Time"] + ["10:00:00"] * n_ch) + t,
+        t.join(["Y_Unit_Label"] + ["g"] * n_ch) + t,
+        t.join(["X_Dimension"] + ["Time"] * n_ch) + t,
+        t.join(["X0"] + ["0,0000000000000000E+0"] * n_ch) + t,
+        t.join(["Delta_X"] + [f"{1 / fs:.6E}".replace(".", ",")] * n_ch) + t,
+        "***End_of_Header***" + t * (n_ch + 1),
+        t.join(["X_Value"] + [f"acc{k + 1:02d}" for k in range(n_ch)] + ["Comment"]),
+    ]
+    assert len(head) == LVM_HEADER_LINES
+    chunk = 200_000
+    with open(path, "w") as fh:
+        fh.write("\n".join(head) + "\n")
+        for start in range(0, n, chunk):
+            m = min(chunk, n - start)
+            block = rng.standard_normal((m, n_ch))
+            text = "\n".join(
+                "\t" + "\t".join(f"{v:.6f}" for v in row) for row in block
+            ).replace(".", ",")
+            fh.write(text + "\n")
 
 
 def write_uff58b(path: Path, n_rec: int, n: int, fs: float, rng: np.random.Generator) -> None:
@@ -193,6 +237,22 @@ def main() -> None:
             f"cpu {m['cpu'] / p['cpu']:.3f} (target <= 1.2)"
         )
         csv.unlink()
+
+        lvm = Path(tmp) / "big.lvm"
+        n_lvm = n // 4
+        write_lvm(lvm, 4, args.fs, n_lvm, rng)
+        print(
+            f"LVM: 4 ch x {n_lvm} samples, decimal commas "
+            f"({os.path.getsize(lvm) / 2**20:.0f} MiB of text)"
+        )
+        m, p = best_pair("lvm-mvtk", "lvm-pandas", lvm, args.repeats)
+        report("mvtk.io.read", m)
+        report("pandas.read_csv", p)
+        print(
+            f"  ratio mvtk/pandas: wall {m['seconds'] / p['seconds']:.3f}, "
+            f"cpu {m['cpu'] / p['cpu']:.3f}"
+        )
+        lvm.unlink()
 
         uff = Path(tmp) / "big.uff"
         write_uff58b(uff, args.channels, args.uff_samples, args.fs, rng)

@@ -60,9 +60,15 @@ Formats and their options
     ``data``, ``time``, ``fs``, ``dt``, ``channels``, ``units``, ``quantity``; netCDF4
     files go to the netCDF reader.
 ``netcdf`` (.nc)
-    no options.
+    no options. mvtk's own output reads back with ``attrs["format"] == "netcdf"``; the
+    file that was read originally is kept as ``attrs["original_source"]`` (and its reader
+    as ``attrs["original_format"]``).
 ``tdms`` (.tdms, optional extra ``mvtk[tdms]``)
     ``units``, ``fs``, ``allow_truncated``.
+``lvm`` (.lvm, LabVIEW Measurement text files)
+    ``decimal``, ``encoding``, ``fs``, ``units``, ``quantity``, ``allow_truncated`` --
+    file and segment headers, decimal comma or point, any separator, several segments,
+    ``X_Columns`` No / One / Multi (:func:`mvtk.io._lvm.read_lvm`).
 ``wav`` (.wav)
     ``calibration``, ``units``, ``quantity``, ``channels``.
 
@@ -93,6 +99,7 @@ from ._containers import (
     sniff_tdms,
     sniff_wav,
 )
+from ._lvm import LVM_EXTENSIONS, read_lvm, sniff_lvm
 from ._model import (
     QUANTITIES,
     UNITS_BY_QUANTITY,
@@ -128,8 +135,9 @@ __all__ = [
 
 register_reader("uff", read_uff, extensions=UFF_EXTENSIONS, sniff=sniff_uff)
 register_reader("mat", read_mat, extensions=(".mat",), sniff=sniff_mat)
-register_reader("netcdf", read_netcdf, extensions=NETCDF_EXTENSIONS, sniff=sniff_netcdf)
 register_reader("hdf5", read_hdf5, extensions=(".h5", ".hdf5", ".hdf", ".he5"), sniff=sniff_hdf5)
+register_reader("netcdf", read_netcdf, extensions=NETCDF_EXTENSIONS, sniff=sniff_netcdf)
 register_reader("tdms", read_tdms, extensions=(".tdms",), sniff=sniff_tdms)
+register_reader("lvm", read_lvm, extensions=LVM_EXTENSIONS, sniff=sniff_lvm)
 register_reader("wav", read_wav, extensions=(".wav",), sniff=sniff_wav)
 register_reader("text", read_text, extensions=TEXT_EXTENSIONS, sniff=sniff_text)

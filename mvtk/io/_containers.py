@@ -66,8 +66,19 @@ def read_mat(
     frequency=None,
     spectra=None,
     spectrum_units=None,
+    response=None,
+    reference=None,
+    response_units=None,
+    reference_units=None,
+    phase_units="deg",
 ):
     """Read a MATLAB file (v5/v7 with scipy.io, v7.3 with h5py).
+
+    Variables inside structs are named by their path, ``"Fe.Out.Acc"``. Spectra and FRFs
+    can be read without time histories (``spectra`` and ``frequency`` only). FRFs,
+    coherence, cross spectra and transmissibilities become ``(response, reference,
+    frequency)`` matrices (``docs/conventions.md``); auto spectra ``(channel,
+    frequency)``, on the time-history channels when there is one spectrum per channel.
 
     Parameters
     ----------
@@ -86,9 +97,23 @@ def read_mat(
     frequency : str, optional
         Variable holding the frequency axis (Hz) of ``spectra``.
     spectra : dict, optional
-        ``{kind: variable name or list of names}``, e.g. ``{"frf": "Hf_chan_2"}``.
+        ``{kind: entry}`` with kinds ``frf``, ``coherence``, ``cross_spectrum``,
+        ``transmissibility`` (two-point) or any other name (auto spectra: ``psd``,
+        ``auto_spectrum``...). An entry is a variable name (complex or real values; a 2-D
+        array is responses x lines, a 3-D array responses x references x lines), a list
+        of names (one per response or channel), ``{"magnitude": name, "phase": name}``
+        or ``{"real": name, "imag": name}``; for auto spectra also ``{channel: name}``.
     spectrum_units : dict, optional
-        ``{kind: unit string}`` for the spectra.
+        ``{kind: unit string}``, e.g. ``{"frf": "m/s^2/N"}`` (the response and reference
+        units are taken from it when not given otherwise).
+    response, reference : str or list of str, optional
+        Names of the FRF response and reference channels; a name that is a time-history
+        channel gives its units and quantity.
+    response_units, reference_units : str or list of str, optional
+        Units of the FRF response / reference channels, e.g. ``reference_units="A"`` for
+        a current reference (quantity ``current``) or ``"V"``.
+    phase_units : {"deg", "rad"}, default "deg"
+        Unit of a phase variable given as ``{"magnitude": ..., "phase": ...}``.
     """
     with open(path, "rb") as fh:
         head = fh.read(128)
@@ -105,6 +130,11 @@ def read_mat(
         spectra=spectra,
         spectrum_units=spectrum_units,
         attrs={"mat_header": header},
+        response=response,
+        reference=reference,
+        response_units=response_units,
+        reference_units=reference_units,
+        phase_units=phase_units,
     )
     if head[:10] == b"MATLAB 7.3":
         import h5py
@@ -114,8 +144,8 @@ def read_mat(
         except OSError as err:
             raise FormatError(f"{path}: MAT v7.3 file is not readable HDF5 ({err})") from err
         with fh5:
-            names = [k for k in fh5.keys() if not k.startswith("#")]
-            return build_from_arrays(path, lambda k: np.asarray(fh5[k][()]).T, names, **opts)
+            names = _h5_leaves(fh5)
+            return build_from_arrays(path, lambda k: _h5_value(fh5, k), names, **opts)
     import scipy.io
 
     check_mat5(path, path.read_bytes())
@@ -125,8 +155,49 @@ def read_mat(
         raise FormatError(
             f"{path}: not a readable MAT v5 file ({type(err).__name__}: {err})"
         ) from err
-    names = [k for k in content if not k.startswith("__")]
-    return build_from_arrays(path, content.__getitem__, names, **opts)
+    leaves: dict[str, np.ndarray] = {}
+    for key, value in content.items():
+        if not key.startswith("__"):
+            _mat_leaves(key, value, leaves, 0)
+    return build_from_arrays(path, leaves.__getitem__, list(leaves), **opts)
+
+
+def _mat_leaves(name: str, value, out: dict, depth: int) -> None:
+    """Flatten MATLAB structs (scipy.io record arrays) into ``"a.b.c"`` leaf arrays."""
+    arr = np.asarray(value)
+    if arr.dtype.names and depth < 8:
+        if arr.size != 1:
+            out[name] = arr  # struct array: kept whole (not a numeric leaf)
+            return
+        rec = arr.reshape(-1)[0]
+        for field in arr.dtype.names:
+            _mat_leaves(f"{name}.{field}", rec[field], out, depth + 1)
+        return
+    if arr.dtype == object and arr.size == 1 and depth < 8:
+        _mat_leaves(name, arr.reshape(-1)[0], out, depth + 1)
+        return
+    out[name] = arr
+
+
+def _h5_leaves(fh5) -> list[str]:
+    """Dataset paths of a MAT v7.3 file with struct fields joined by dots."""
+    import h5py
+
+    names: list[str] = []
+
+    def visit(key, obj):
+        if isinstance(obj, h5py.Dataset) and not key.startswith("#"):
+            names.append(key.replace("/", "."))
+
+    fh5.visititems(visit)
+    return names
+
+
+def _h5_value(fh5, name: str) -> np.ndarray:
+    arr = np.asarray(fh5[name.replace(".", "/")][()])
+    if arr.dtype.names and set(arr.dtype.names) == {"real", "imag"}:  # MATLAB complex
+        arr = arr["real"] + 1j * arr["imag"]
+    return arr.T
 
 
 def _is_netcdf4(h5file) -> bool:

@@ -29,6 +29,7 @@ QUANTITIES: tuple[str, ...] = (
     "force",
     "strain",
     "voltage",
+    "current",
     "pressure",
     "other",
 )
@@ -41,6 +42,7 @@ UNITS_BY_QUANTITY: dict[str, tuple[str, ...]] = {
     "force": ("N", "kN", "mN"),
     "strain": ("m/m", "um/m", "1"),
     "voltage": ("V", "mV", "uV"),
+    "current": ("A", "mA"),
     "pressure": ("Pa", "kPa", "MPa", "mbar", "bar"),
 }
 
@@ -71,6 +73,14 @@ _UNIT_ALIASES = {
     "volt": "V",
     "volts": "V",
     "newton": "N",
+    "newtons": "N",
+    "amp": "A",
+    "amps": "A",
+    "ampere": "A",
+    "amperes": "A",
+    "a": "A",
+    "ma": "mA",
+    "mv": "mV",
     "g0": "g",
     "gn": "g",
     "-": "1",
@@ -155,7 +165,8 @@ def _per_channel(value, n: int, name: str, default) -> list:
     values = list(value)
     if len(values) != n:
         raise DimensionError(
-            f"{name}: expected one entry per channel ({n}), got {len(values)}: {values!r}"
+            f"{name}: expected one entry per channel ({n}), got {len(values)}: "
+            f"{[str(v) for v in values]}"
         )
     return values
 

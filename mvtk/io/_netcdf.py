@@ -17,9 +17,17 @@ NETCDF_EXTENSIONS = (".nc", ".nc4", ".netcdf", ".cdf")
 HDF5_MAGIC = b"\x89HDF\r\n\x1a\n"
 
 
-def sniff_netcdf(head: bytes) -> bool:
-    """netCDF3 classic/64-bit magic (netCDF4 files are HDF5 and are sniffed by content)."""
+def _is_netcdf3(head: bytes) -> bool:
     return head[:3] == b"CDF" and head[3:4] in (b"\x01", b"\x02", b"\x05")
+
+
+def sniff_netcdf(head: bytes) -> bool:
+    """netCDF3 classic/64-bit magic, or the HDF5 signature of a netCDF4 file.
+
+    A plain HDF5 file is claimed by the netCDF reader only through a netCDF extension
+    (``.nc``): the ``hdf5`` reader is registered first and wins on content alone.
+    """
+    return _is_netcdf3(head) or head[:8] == HDF5_MAGIC
 
 
 def read_netcdf(path: Path):
@@ -32,7 +40,7 @@ def read_netcdf(path: Path):
     """
     with open(path, "rb") as fh:
         head = fh.read(8)
-    engine = "scipy" if sniff_netcdf(head) else "h5netcdf"
+    engine = "scipy" if _is_netcdf3(head) else "h5netcdf"
     if engine == "h5netcdf" and head != HDF5_MAGIC:
         raise FormatError(
             f"{path}: starts with {head!r}; expected the HDF5 signature of a netCDF4 file or "

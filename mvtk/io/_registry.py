@@ -130,7 +130,7 @@ def detect_format(path: str | os.PathLike) -> str:
     ext = path.suffix.lower()
     by_ext = [r for r in _REGISTRY.values() if ext in r.extensions]
     for reader in by_ext:
-        if reader.sniff is not None and reader.sniff(head):
+        if reader.name != "text" and reader.sniff is not None and reader.sniff(head):
             return reader.name
     for reader in _REGISTRY.values():
         if reader.sniff is not None and reader not in by_ext and reader.name != "text":
@@ -177,6 +177,18 @@ def _fixed_width_strings(ds: xr.Dataset) -> xr.Dataset:
         if changes
         else ds
     )
+
+
+def _provenance(attrs, path: Path, format: str) -> dict:
+    """``source``/``format`` of this read; a file that records an earlier read (mvtk's
+    own netCDF output) keeps it as ``original_source``/``original_format``."""
+    out = {"source": str(path), "format": format}
+    before = attrs.get("source")
+    if before is not None and str(before) != str(path) and "original_source" not in attrs:
+        out["original_source"] = str(before)
+        if attrs.get("format") is not None:
+            out["original_format"] = str(attrs["format"])
+    return out
 
 
 def read(path: str | os.PathLike, format: str | None = None, **options) -> xr.Dataset:
@@ -240,11 +252,11 @@ def read(path: str | os.PathLike, format: str | None = None, **options) -> xr.Da
             f"{path}: reader {format!r} returned {type(ds).__name__}; expected an xarray.Dataset"
         )
     ds = _fixed_width_strings(ds)
-    ds.attrs = clean_attrs({**ds.attrs, "source": str(path), "format": format})
+    ds.attrs = clean_attrs({**ds.attrs, **_provenance(ds.attrs, path, format)})
     for name, var in ds.data_vars.items():
         if str(name).startswith("time_history"):
             var.attrs = clean_attrs(
-                {**ds.attrs, **var.attrs, "source": str(path), "format": format}
+                {**ds.attrs, **var.attrs, **_provenance(var.attrs, path, format)}
             )
     validate(ds)
     return ds

@@ -71,6 +71,8 @@ def _check_channels(da: xr.DataArray, cdim: str, label: str, where: str) -> None
                 "found none"
             )
     for name, q, u in zip(names, da[q_name].values, da[u_name].values):
+        q = str(q) if isinstance(q, str | np.str_) else q  # no numpy reprs in messages
+        u = str(u) if isinstance(u, str | np.str_) else u
         if q not in QUANTITIES:
             raise FormatError(
                 f"{label}{where}: channel {name!r} has quantity {q!r}; expected one of "
@@ -96,7 +98,7 @@ def _check_values(da: xr.DataArray, cdim: str, label: str, where: str) -> None:
         nan_count = np.zeros(values.shape[0], dtype=np.int64)
     elif np.isinf(values).any():
         ch, i = np.argwhere(np.isinf(values))[0][:2]
-        name = da[cdim].values[ch] if values.ndim == 2 else ch
+        name = str(da[cdim].values[ch]) if values.ndim == 2 else int(ch)
         raise FormatError(f"{label}{where}: infinite value in channel {name!r} at sample {i}")
     else:
         nan_count = (~finite).reshape(values.shape[0], -1).sum(axis=1)
@@ -107,7 +109,7 @@ def _check_values(da: xr.DataArray, cdim: str, label: str, where: str) -> None:
         else np.zeros(values.shape[0], dtype=np.int64)
     )
     for k in np.flatnonzero(nan_count != marked):
-        name = da[cdim].values[k]
+        name = str(da[cdim].values[k])
         raise FormatError(
             f"{label}{where}: channel {name!r} holds {int(nan_count[k])} NaN samples but the "
             f"source marks {int(marked[k])} as missing (coordinate {m_name!r}); expected finite "

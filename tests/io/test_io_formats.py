@@ -216,10 +216,15 @@ def test_hdf5_generic_with_paths(tmp_path, rng):
 def test_netcdf_dataarray_write_and_bad_write(tmp_path, rng):
     da = mio.time_history(rng.standard_normal((2, 10)), 100.0, ["a", "b"], ["m/s^2", "N"])
     path = mio.write(da, tmp_path / "x.nc")
-    assert mio.detect_format(path) == "hdf5"  # netCDF4 is HDF5; the reader hands over
+    assert mio.detect_format(path) == "netcdf"  # issue 14: own output is netCDF, not hdf5
     back = mio.read(path)["time_history"]
     np.testing.assert_array_equal(back.values, da.values)
-    assert back.attrs["format"] == "hdf5"
+    assert back.attrs["format"] == "netcdf"
+    assert "original_source" not in back.attrs  # a DataArray from memory had no source
+    h5 = tmp_path / "same.h5"  # the same netCDF4 bytes under an HDF5 name: the hdf5 reader
+    h5.write_bytes(path.read_bytes())
+    assert mio.detect_format(h5) == "hdf5"
+    np.testing.assert_array_equal(mio.read(h5)["time_history"].values, da.values)
     with pytest.raises(ParameterError, match="expected an xarray.Dataset or DataArray, got list"):
         mio.write([1, 2], tmp_path / "y.nc")
     bad = da.copy()

@@ -128,15 +128,45 @@ def test_mat_case_files(shared_data):
     th = ds["time_history"]
     assert th.shape == (2, 4096) and th.attrs["fs"] == 1280.0
     frf = ds["frf"]
-    assert frf.shape == (1, 1601)
+    assert frf.dims == ("response", "reference", "frequency")  # docs/conventions.md
+    assert frf.shape == (1, 1, 1601)
+    assert ds["coherence"].dims == frf.dims  # shares the FRF axes (no response_2)
     np.testing.assert_allclose(np.diff(frf.frequency.values[:3]), 0.3125)
     f = frf.frequency.values
     band = (f > 150) & (f < 250)
-    assert f[band][np.argmax(np.abs(frf.values[0, band]))] == pytest.approx(212.2, abs=1.0)
+    assert f[band][np.argmax(np.abs(frf.values[0, 0, band]))] == pytest.approx(212.2, abs=1.0)
     ds2 = mio.read(shared_data / "mat" / "case2.mat", **MAT_OPTS)
     f2 = ds2["frf"].frequency.values
     band = (f2 > 150) & (f2 < 250)
-    assert f2[band][np.argmax(np.abs(ds2["frf"].values[0, band]))] == pytest.approx(192.5, abs=1.0)
+    peak = f2[band][np.argmax(np.abs(ds2["frf"].values[0, 0, band]))]
+    assert peak == pytest.approx(192.5, abs=1.0)
+
+
+def test_mat_case_frf_only_and_channels_named(shared_data):
+    """Issue 14: FRF without time histories; spectra on 'channel', never 'channel_2'."""
+    path = shared_data / "mat" / "case1.mat"
+    ds = mio.read(
+        path,
+        frequency="Freq_domain",
+        spectra={"frf": "Hf_chan_2", "coherence": "Hf_coh_chan_2"},
+        spectrum_units={"frf": "m/s^2/N"},
+    )
+    frf = ds["frf"]
+    assert frf.shape == (1, 1, 1601) and "time_history" not in ds
+    assert frf.attrs["frf_type"] == "accelerance"
+    assert list(frf.units.values) == ["m/s^2"] and list(frf.reference_units.values) == ["N"]
+    assert frf.frequency.values[1] == 0.3125 and frf.frequency.size == 1601
+    both = mio.read(
+        path,
+        **MAT_OPTS | {"spectra": {"frf": "Hf_chan_2", "psd": ["PSD_chan_1", "PSD_chan_2"]}},
+        response="Time_chan_2",
+        reference="Time_chan_1",
+    )
+    assert both["psd"].dims == ("channel", "frequency")
+    assert not any(str(d).endswith("_2") for d in both.dims)
+    assert list(both["frf"].response_quantity.values) == ["acceleration"]
+    assert list(both["frf"].reference_quantity.values) == ["force"]
+    assert both["frf"].attrs["frf_type"] == "accelerance"
 
 
 def test_mat_without_data_option_names_variables(shared_data):
@@ -199,10 +229,13 @@ ROUND_TRIP = [
 ]
 
 
+_PROVENANCE = ("source", "format", "original_source", "original_format")
+
+
 def _without_provenance(ds: xr.Dataset) -> xr.Dataset:
     out = ds.copy()
     for obj in [out, *out.data_vars.values()]:
-        obj.attrs = {k: v for k, v in obj.attrs.items() if k not in ("source", "format")}
+        obj.attrs = {k: v for k, v in obj.attrs.items() if k not in _PROVENANCE}
     return out
 
 
@@ -211,7 +244,19 @@ def test_round_trip_netcdf_identical(shared_data, tmp_path, rel, options):
     first = _read(shared_data / rel, **options)
     out = mio.write(first, tmp_path / "copy.nc")
     second = mio.read(out)
-    assert second.attrs["format"] == "hdf5" or second.attrs["format"] == "netcdf"
+    assert second.attrs["format"] == "netcdf"  # issue 14: not "hdf5"
+    assert second.attrs["original_source"] == str(shared_data / rel)
     xr.testing.assert_identical(_without_provenance(first), _without_provenance(second))
     for name in first.variables:
         assert first[name].dtype == second[name].dtype, name
+
+
+def test_mat_frf_feeds_half_power(shared_data):
+    """Issue 14 symptom: half_power rejected the MAT reader's output (dim 'channel_2')."""
+    import mvtk.damping as md
+
+    ds = mio.read(shared_data / "mat" / "case1.mat", **MAT_OPTS)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = md.half_power(ds["frf"], fn_hz=[212.1])
+    assert res.fn_hz[0] == pytest.approx(212.09, abs=0.3)  # source project's fit: 212.0925

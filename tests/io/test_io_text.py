@@ -122,7 +122,8 @@ def test_round_trip_text(tmp_path):
     second = mio.read(mio.write(first, tmp_path / "a.nc"))
     for ds in (first, second):
         for obj in [ds, *ds.data_vars.values()]:
-            obj.attrs.pop("source"), obj.attrs.pop("format")
+            for key in ("source", "format", "original_source", "original_format"):
+                obj.attrs.pop(key, None)
     xr.testing.assert_identical(first, second)
 
 
@@ -253,3 +254,49 @@ def test_no_warning_for_clean_file(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         mio.read(_write(tmp_path, "a.csv", GOOD))
+
+
+# ---------------------------------------------------------------- whole-file vs chunked
+
+
+def _big_csv(tmp_path, rng, trailing=False, nan_at=None):
+    n = 70_000  # > 5 MiB: pandas' multi-threaded whole-file parser is eligible
+    data = np.round(rng.standard_normal((n, 8)), 6)
+    if nan_at is not None:
+        data[nan_at, 3] = np.nan
+    path = tmp_path / "big.csv"
+    block = np.column_stack([np.arange(n) / 1000.0, data])
+    head = f"time [s],{','.join(f'a{k} [m/s^2]' for k in range(8))}"
+    fmt = ",".join(["%.3f"] + ["%.6f"] * 8) + ("," if trailing else "")
+    np.savetxt(path, block, fmt=fmt, header=head, comments="")
+    return path, data
+
+
+@pytest.mark.parametrize("trailing", [False, True])
+def test_whole_file_and_chunked_paths_agree(tmp_path, rng, monkeypatch, trailing):
+    import mvtk.io._text as text
+
+    path, data = _big_csv(tmp_path, rng, trailing=trailing)
+    assert path.stat().st_size > 5 * 2**20
+    calls = []
+    real = text._read_whole
+    monkeypatch.setattr(text, "_read_whole", lambda *a: calls.append(1) or real(*a))
+    whole = mio.read(path)["time_history"]
+    assert calls, "the whole-file path was expected for a file that fits the memory budget"
+    monkeypatch.setattr(text, "whole_file_fits", lambda nbytes: False)
+    calls.clear()
+    chunked = mio.read(path)["time_history"]
+    assert not calls
+    np.testing.assert_array_equal(whole.values, data.T)
+    xr.testing.assert_identical(whole, chunked)
+
+
+def test_memory_budget(monkeypatch):
+    import mvtk.io._text as text
+
+    monkeypatch.setattr(text, "available_memory", lambda: 1000 * 2**20)
+    assert text.whole_file_fits(100 * 2**20)  # 3 x 100 MiB <= 0.5 x 1000 MiB
+    assert not text.whole_file_fits(200 * 2**20)
+    monkeypatch.setattr(text, "available_memory", lambda: None)
+    assert text.whole_file_fits(300 * 2**20) and not text.whole_file_fits(400 * 2**20)
+    assert text.available_memory is not None

@@ -33,7 +33,8 @@ def _text(nb) -> str:
 
 
 def test_there_are_three_notebooks():
-    assert [p.name[:2] for p in NOTEBOOKS] == ["01", "02", "03"]
+    assert [p.name[:2] for p in NOTEBOOKS if p.name[:2].isdigit()] == ["01", "02", "03"]
+    assert "lvm_impact.ipynb" in [p.name for p in NOTEBOOKS]
 
 
 def test_committed_notebooks_have_no_outputs():
@@ -55,5 +56,14 @@ def test_notebook_runs(path):
         # runs without ../shared/data too, and then says so instead of analysing
         if (ROOT.parent / "shared" / "data" / "hdf5" / "view_0.hdf5").is_file():
             assert "found" in text and "zeta" in text and "NOT FOUND" not in text
+        else:
+            assert "NOT FOUND" in text
+    if path.name == "lvm_impact.ipynb":
+        import os
+
+        shared = Path(os.environ.get("MVTK_SHARED_DATA", ROOT.parent / "shared" / "data"))
+        if (shared / "lvm" / "camera.lvm").is_file():
+            # issue 19: the two hits' identified frequencies agree within 0.1 %
+            assert "agree within 0.1 %: True" in text and "NOT FOUND" not in text
         else:
             assert "NOT FOUND" in text
