@@ -1,5 +1,6 @@
 """End to end on files: mvtk.io.read -> mvtk.signal -> mvtk.damping."""
 
+import re
 import warnings
 from pathlib import Path
 
@@ -44,7 +45,7 @@ def test_smart_beam_impact_frf_warns(beam_files):
         warnings.simplefilter("always")
         r = D.half_power(d, fn_hz=[13.26, 41.14], method="interpolate", max_scatter=0.03)
     cats = {w.category: str(w.message) for w in rec}
-    assert "13.26 Hz: 1.6 lines" in cats[ResolutionWarning]
+    assert re.search(r"13\.26 Hz: 1\.\d lines", cats[ResolutionWarning])
     assert "41.14 Hz" in cats[AccuracyWarning]
     assert r.quality == ("coarse", "noisy")
     np.testing.assert_allclose(r.fn_hz, [13.26, 41.14], rtol=5e-4)
