@@ -15,6 +15,7 @@ from ._lsfd import LsfdFit, lsfd, synthesise
 from ._plscf import plscf
 from ._quality import cmif, mac, mpc, mpd
 from ._result import IdentifiedModes
+from ._ssi import identify_output_only, ssi_cov
 from ._stabilisation import (
     ClusterCriteria,
     SelectedPoles,
@@ -40,6 +41,7 @@ __all__ = [
     "exact_modes",
     "frf_matrix",
     "identify",
+    "identify_output_only",
     "lsfd",
     "mac",
     "mpc",
@@ -48,5 +50,6 @@ __all__ = [
     "poles_near",
     "reciprocal",
     "select_poles",
+    "ssi_cov",
     "synthesise",
 ]
