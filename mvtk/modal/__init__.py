@@ -9,6 +9,7 @@ shapes ``("mode", "dof")``, synthesised FRFs, AutoMAC). Export to UFF 55/58 with
 :func:`write_uff`. Conventions: ``docs/conventions.md``; guide: ``docs/modal.md``.
 """
 
+from ._export import write_frf_uff, write_modes_uff
 from ._frf import FRF_TYPES, as_frf_matrix, convert_frf, frf_matrix, reciprocal
 from ._identify import identify
 from ._lsfd import LsfdFit, lsfd, synthesise
@@ -52,4 +53,6 @@ __all__ = [
     "select_poles",
     "ssi_cov",
     "synthesise",
+    "write_frf_uff",
+    "write_modes_uff",
 ]

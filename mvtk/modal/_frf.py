@@ -63,6 +63,16 @@ def _frf_type(quantity: str, ref_quantity: str) -> str:
     return _KIND_OF_QUANTITY.get(quantity, "other")
 
 
+def _kind_from_units(units: str) -> str:
+    """FRF type from an ordinate unit such as ``m/s^2/N`` or ``(1/N)*(m/s2)``."""
+    u = units.replace(" ", "").lower().replace("**", "^")
+    table = {"m/n": "receptance", "m/s/n": "mobility", "m/s^2/n": "accelerance",
+             "m/s2/n": "accelerance", "g/n": "accelerance", "(m/s^2)/n": "accelerance",
+             "(1/n)*(m/s2)": "accelerance", "(1/n)*(m/s^2)": "accelerance",
+             "(m/s)/n": "mobility", "(1/n)*(m/s)": "mobility", "(1/n)*(m)": "receptance"}
+    return table.get(u, "")
+
+
 def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
     """Check or adopt an FRF matrix on the conventions of ``docs/conventions.md``.
 
@@ -150,7 +160,9 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
     kind = frf_type or attrs.get("frf_type") or attrs.get("kind") or ""
     if not kind:
         kinds = {_frf_type(a, b) for a in q for b in rq} if q and rq else set()
-        kind = kinds.pop() if len(kinds) == 1 else "other"
+        kind = kinds.pop() if len(kinds) == 1 else ""
+    if not kind or kind == "other":
+        kind = _kind_from_units(str(attrs.get("units", ""))) or kind or "other"
     if kind not in (*FRF_TYPES, "other"):
         raise ParameterError(
             f"frf_type must be one of {(*FRF_TYPES, 'other')}, got {kind!r}"

@@ -8,6 +8,7 @@ from ._figures import (
     plot_spectra,
     plot_time_responses,
 )
+from ._modal import plot_automac, plot_frf_synthesis, plot_stabilisation
 
 __all__ = [
     "figure_to_png",
@@ -16,4 +17,7 @@ __all__ = [
     "plot_mode_shapes",
     "plot_time_responses",
     "plot_spectra",
+    "plot_stabilisation",
+    "plot_frf_synthesis",
+    "plot_automac",
 ]
