@@ -73,6 +73,26 @@ def _kind_from_units(units: str) -> str:
     return table.get(u, "")
 
 
+def _channel_spectra_as_frf(ds: xr.Dataset):
+    """A Dataset with one complex ``(channel, frequency)`` variable (FRFs stored per
+    channel, e.g. a text file of complex values) as responses x one reference."""
+    cands = [v for v in ds.data_vars
+             if ds[v].dims == ("channel", "frequency") and np.iscomplexobj(ds[v].values)]
+    if len(cands) != 1:
+        return ds
+    da = ds[cands[0]]
+    if "reference" in da.coords and len(set(map(str, da["reference"].values))) > 1:
+        return ds
+    ref = str(da["reference"].values[0]) if "reference" in da.coords else "reference"
+    out = da.expand_dims(reference=[ref], axis=1).rename(channel="response")
+    keep = {c: out[c] for c in ("node", "direction", "quantity", "units") if c in out.coords}
+    out = out.drop_vars([c for c in out.coords if c not in ("response", "reference",
+                                                              "frequency")])
+    out = out.assign_coords({k: ("response", v.values) for k, v in keep.items()})
+    out.attrs = {**ds.attrs, **da.attrs}
+    return xr.Dataset({"frf": out}, attrs=out.attrs)
+
+
 def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
     """Check or adopt an FRF matrix on the conventions of ``docs/conventions.md``.
 
@@ -103,6 +123,8 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
     FormatError
         The frequencies are not ascending or the values not finite.
     """
+    if isinstance(obj, xr.Dataset) and "frf" not in obj.data_vars:
+        obj = _channel_spectra_as_frf(obj)
     if isinstance(obj, xr.Dataset):
         if "frf" not in obj.data_vars:
             raise DimensionError(

@@ -66,11 +66,14 @@ def _driving_point(h):
     return None
 
 
-def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01):
+def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None):
     """``reliable`` and ``reason`` per mode from the stated criteria."""
     reliable, reason = [], []
     for f, z, m, c in zip(fn, zeta, mpc_v, count):
         why = []
+        if df_hz is not None and 0 < z and 2 * z * f < df_hz:
+            why.append(f"half-power bandwidth {2 * z * f:.3g} Hz < line spacing "
+                       f"{df_hz:.3g} Hz: damping not resolved")
         if c < need:
             why.append(f"stable in {c} model orders (< {need:g})")
         if not (0 < z <= zeta_max):
@@ -120,7 +123,8 @@ def identify(
     -------
     IdentifiedModes
         Table with quality (``reliable``/``reason``: stable in too few orders, damping
-        outside ``(0, zeta_max]``, a pole within 1 % of a band edge, MPC < 0.5), complex
+        outside ``(0, zeta_max]``, a pole within 1 % of a band edge, MPC < 0.5, a
+        half-power bandwidth ``2 zeta fn`` narrower than the line spacing), complex
         and real shapes at the response DOFs (mass-normalised when a driving point
         exists), synthesised FRFs and their correlation with the measured ones.
 
@@ -197,8 +201,9 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     mpc_v = mpc(cplx) if no > 1 else np.ones(nm)
     mpd_v = mpd(cplx) if no > 1 else np.zeros(nm)
     need = clus.min_count
+    df = float(np.median(np.diff(f)))
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
-                                     stab.zeta_max)
+                                     stab.zeta_max, df_hz=df)
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
