@@ -66,11 +66,20 @@ def _driving_point(h):
     return None
 
 
-def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None):
+def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None,
+                  contribution=None, min_contribution=0.1, local=None, min_local=0.8):
     """``reliable`` and ``reason`` per mode from the stated criteria."""
     reliable, reason = [], []
-    for f, z, m, c in zip(fn, zeta, mpc_v, count):
+    contribution = np.full(len(fn), np.nan) if contribution is None else contribution
+    local = np.full(len(fn), np.nan) if local is None else local
+    for f, z, m, c, q, loc in zip(fn, zeta, mpc_v, count, contribution, local):
         why = []
+        if np.isfinite(loc) and loc < min_local:
+            why.append(f"measured vs synthesised FRF correlation {loc:.2f} < {min_local:g} "
+                       "around the mode (noise fitted?)")
+        if np.isfinite(q) and q < min_contribution:
+            why.append(f"weak: the mode makes {q:.0%} of |H| at its frequency "
+                       f"(< {min_contribution:.0%})")
         if df_hz is not None and 0 < z and 2 * z * f < df_hz:
             why.append(f"half-power bandwidth {2 * z * f:.3g} Hz < line spacing "
                        f"{df_hz:.3g} Hz: damping not resolved")
@@ -123,7 +132,10 @@ def identify(
     -------
     IdentifiedModes
         Table with quality (``reliable``/``reason``: stable in too few orders, damping
-        outside ``(0, zeta_max]``, a pole within 1 % of a band edge, MPC < 0.5, a
+        outside ``(0, zeta_max]``, a pole within 1 % of a band edge, MPC < 0.5, a weak
+        mode whose own FRF is < 10 % of the measured ``|H|`` at its frequency, a
+        measured vs synthesised correlation < 0.8 within ``fn +- max(5 lines, 2 zeta
+        fn)`` (poles fitted to noise), a
         half-power bandwidth ``2 zeta fn`` narrower than the line spacing), complex
         and real shapes at the response DOFs (mass-normalised when a driving point
         exists), synthesised FRFs and their correlation with the measured ones.
@@ -145,6 +157,32 @@ def identify(
     else:
         sel = select_poles(diagram, clus)
     return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals)
+
+
+def _contribution(fit, h):
+    """``||H_m(f_n)|| / ||H_measured(f_n)||`` (Frobenius over all FRFs) of each mode."""
+    f = h["frequency"].values
+    out = np.empty(fit.pole.size)
+    for m, (lam, A) in enumerate(zip(fit.pole, fit.residue)):
+        k = int(np.argmin(np.abs(f - abs(lam) / (2 * np.pi))))
+        iw = 2j * np.pi * f[k]
+        hm = (A / (iw - lam) + np.conj(A) / (iw - np.conj(lam))) * iw**fit.power
+        den = np.linalg.norm(h.values[:, :, k])
+        out[m] = np.linalg.norm(hm) / den if den > 0 else np.nan
+    return out
+
+
+def _local_correlation(Hm, Hs, f, fn, zeta):
+    """Measured vs synthesised correlation over ``fn +- max(5 lines, 2 zeta fn)``."""
+    df = float(np.median(np.diff(f)))
+    out = np.empty(len(fn))
+    for m, (f0, z) in enumerate(zip(fn, zeta)):
+        half = max(5 * df, 2 * abs(z) * f0)
+        k = (f >= f0 - half) & (f <= f0 + half)
+        a, b = Hm[..., k], Hs[..., k]
+        den = np.sum(np.abs(a) ** 2) * np.sum(np.abs(b) ** 2)
+        out[m] = np.abs(np.sum(a * np.conj(b))) ** 2 / den if den > 0 else np.nan
+    return out
 
 
 def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True):
@@ -202,8 +240,11 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     mpd_v = mpd(cplx) if no > 1 else np.zeros(nm)
     need = clus.min_count
     df = float(np.median(np.diff(f)))
+    contrib = _contribution(fit, h)
+    local = _local_correlation(h.values, syn_v, f, fn, zeta)
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
-                                     stab.zeta_max, df_hz=df)
+                                     stab.zeta_max, df_hz=df, contribution=contrib,
+                                     local=local)
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
