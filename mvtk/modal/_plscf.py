@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg
 
 from ..errors import ParameterError, ResolutionWarning
 from ._frf import as_frf_matrix
@@ -129,10 +130,8 @@ def plscf(
     T = _toeplitz_blocks(tau, P + 1, (ni, ni))
     sig = sig.reshape(2 * P + 1, no, 1, ni).transpose(1, 0, 2, 3)           # (no, lags, 1, ni)
     S = -np.stack([_toeplitz_blocks(sig[o], P + 1, (1, ni)) for o in range(no)])
-    from scipy.linalg import solve_triangular
-
-    W = solve_triangular(L, S.transpose(1, 0, 2).reshape(P + 1, no * S.shape[2]),
-                         lower=True).reshape(P + 1, no, -1)                # (P+1, no, q)
+    W = scipy.linalg.solve_triangular(L, S.transpose(1, 0, 2).reshape(P + 1, no * S.shape[2]),
+                                      lower=True).reshape(P + 1, no, -1)   # (P+1, no, q)
     acc = np.zeros_like(T)
     want = set(orders.tolist())
     per_order = []
@@ -154,13 +153,21 @@ def plscf(
             comp[:-ni, ni:] = np.eye((p - 1) * ni)
         blocks = alpha.reshape(p, ni, ni)
         comp[-ni:, :] = -np.concatenate([b.T for b in blocks], axis=1)
-        mu, V = np.linalg.eig(comp)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lam = np.log(mu.astype(complex)) / dt
+        mu = scipy.linalg.eigvals(comp, overwrite_a=True, check_finite=False)
+        mu = mu[mu.imag > 0]  # one of each conjugate pair (real poles are not modes)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            lam = np.log(mu) / dt
         good = np.isfinite(lam)
-        vec = V[:ni, :].T[good]
-        nrm = np.linalg.norm(vec, axis=1, keepdims=True)
-        vec = vec / np.where(nrm > 0, nrm, 1)
+        mu, lam = mu[good], lam[good]
+        # participation vectors: left null vectors of D(mu) = sum alpha_r mu^r
+        # (alpha_p = I), from a batched SVD of the n_i x n_i matrices
+        if ni > 1 and mu.size:
+            pw = mu[:, None] ** np.arange(p + 1)[None, :]
+            coef = np.concatenate([blocks, np.eye(ni)[None]], axis=0)   # (p+1, ni, ni)
+            dmat = np.einsum("kr,rij->kji", pw, coef)                   # D(mu)^T
+            vec = np.conj(np.linalg.svd(dmat)[2][:, -1, :])
+        else:
+            vec = np.ones((mu.size, 1), complex)
         per_order.append((p, lam[good], vec))
     ind = cmif(H)
     return poles_to_diagram("pLSCF", per_order, (f[0], f[-1]), f, ind, crit)

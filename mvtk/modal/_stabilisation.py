@@ -8,7 +8,6 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from ._quality import mac
 
 __all__ = ["StabilisationDiagram", "StabilityCriteria", "ClusterCriteria", "select_poles",
            "poles_near"]
@@ -143,7 +142,10 @@ def poles_to_diagram(method, per_order, band, ind_f, ind, criteria) -> Stabilisa
             okf = np.abs(fn - pf[j]) <= c.df * fn
             okz = np.abs(z - pz[j]) <= c.dzeta * np.abs(z)
             if vec.shape[1] > 1:
-                m = np.array([mac(vec[i], pv[j[i]])[0, 0] for i in range(lam.size)])
+                b = pv[j]
+                num = np.abs(np.sum(np.conj(vec) * b, axis=1)) ** 2
+                den = np.sum(np.abs(vec) ** 2, axis=1) * np.sum(np.abs(b) ** 2, axis=1)
+                m = np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)
                 okv = m >= 1 - c.dmac
             else:
                 okv = np.ones(lam.size, bool)
