@@ -209,32 +209,33 @@ def select_poles(diagram: StabilisationDiagram, criteria: ClusterCriteria | None
                           np.zeros(0, int), np.zeros(0, int), ())
     if stable.size == 0:
         return empty
-    f, z = diagram.fn_hz[stable], diagram.zeta[stable]
+    fn_all, z_all, ord_all = diagram.fn_hz, diagram.zeta, diagram.order
+    f, z = fn_all[stable], z_all[stable]
     labels = _cluster(f, z, crit)
     groups = [stable[labels == lab] for lab in np.unique(labels)]
-    # merge clusters of one mode split by scatter (near in f, disjoint orders)
-    merged = True
-    while merged and len(groups) > 1:
-        merged = False
-        groups.sort(key=lambda g: np.median(diagram.fn_hz[g]))
-        for a in range(len(groups) - 1):
-            ga, gb = groups[a], groups[a + 1]
-            fa, fb = np.median(diagram.fn_hz[ga]), np.median(diagram.fn_hz[gb])
-            if abs(fa - fb) > diagram.criteria.df * 0.5 * (fa + fb):
-                continue
-            oa, ob = set(diagram.order[ga]), set(diagram.order[gb])
-            if len(oa & ob) <= crit.merge_overlap * min(len(oa), len(ob)):
-                groups[a] = np.concatenate([ga, gb])
-                del groups[a + 1]
-                merged = True
-                break
-    counts = np.array([len(set(diagram.order[g])) for g in groups])
+    meds = [float(np.median(fn_all[g])) for g in groups]
+    idx = np.argsort(meds)
+    groups, meds = [groups[i] for i in idx], [meds[i] for i in idx]
+    # merge neighbouring clusters of one mode split by scatter (near in f, disjoint orders)
+    i = 0
+    while i < len(groups) - 1:
+        fa, fb = meds[i], meds[i + 1]
+        oa, ob = set(ord_all[groups[i]]), set(ord_all[groups[i + 1]])
+        if (abs(fa - fb) <= diagram.criteria.df * 0.5 * (fa + fb)
+                and len(oa & ob) <= crit.merge_overlap * min(len(oa), len(ob))):
+            groups[i] = np.concatenate([groups[i], groups[i + 1]])
+            meds[i] = float(np.median(fn_all[groups[i]]))
+            del groups[i + 1], meds[i + 1]
+            i = max(i - 1, 0)
+        else:
+            i += 1
+    counts = np.array([len(set(ord_all[g])) for g in groups])
     need = max(crit.min_count, crit.min_fraction * counts.max())
     reps, members = [], []
     for g, n in zip(groups, counts):
         if n < need:
             continue
-        fg, zg = diagram.fn_hz[g], diagram.zeta[g]
+        fg, zg = fn_all[g], z_all[g]
         dist = np.abs(fg - np.median(fg)) / np.median(fg) / crit.cluster_df + \
             np.abs(zg - np.median(zg)) / max(np.median(zg), crit.zeta_floor) / crit.cluster_dzeta
         reps.append(g[np.argmin(dist)])

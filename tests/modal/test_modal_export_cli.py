@@ -14,7 +14,7 @@ from mvtk.errors import FormatError, ParameterError
 
 def _modes(msys):
     M, C, K = msys.chain(4)
-    f = np.arange(0, 120, 0.05)
+    f = np.arange(0, 120, 0.2)
     h = modal.exact_frf(M, C, K, f, range(4), [0, 2], frf_type="accelerance")
     return modal.identify(h, 2, 115), M, C, K
 
@@ -61,6 +61,7 @@ def test_cli_json_and_exports(msys, tmp_path, capsys):
     assert "no physical pole within 5% of 500 Hz" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_figures(msys):
     pytest.importorskip("matplotlib")
     from mvtk import plot

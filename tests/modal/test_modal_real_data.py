@@ -47,6 +47,7 @@ def _mat_frf(path):
                                 "frequency": m["Freq_domain"].ravel()})
 
 
+@pytest.mark.slow
 def test_mat_impact_tests(modal_data):
     r1 = modal.identify(_mat_frf(modal_data / "mat" / "case1.mat"), 5, 495)
     _near(r1, 34.1, 0.01)

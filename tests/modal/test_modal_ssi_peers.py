@@ -49,6 +49,7 @@ def test_ssi_cov_recovers_modes(msys):
         modal.ssi_cov(th, orders=range(2, 41, 2), n_lags=4)
 
 
+@pytest.mark.slow
 def test_ssi_cov_against_pyoma2(msys):
     pytest.importorskip("pyoma2", reason="pyOMA-2 (test extra) is not installed")
     from pyoma2.algorithms import SSI
@@ -69,6 +70,7 @@ def test_ssi_cov_against_pyoma2(msys):
     np.testing.assert_allclose(peer_fn, fn, rtol=2e-3)
 
 
+@pytest.mark.slow
 def test_plscf_against_sdypy_ema(msys, rng):
     ema = pytest.importorskip("sdypy.EMA", reason="sdypy-EMA (test extra) is not installed")
     M, C, K = msys.chain(5)
