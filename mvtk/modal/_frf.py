@@ -101,7 +101,9 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
     obj : xarray.DataArray or xarray.Dataset
         Complex FRFs with dims ``("response", "reference", "frequency")`` (a Dataset
         must hold a variable ``frf``, as :func:`mvtk.io.read` returns for UFF 58 FRF
-        records and :func:`mvtk.signal.frf` for time histories).
+        records and :func:`mvtk.signal.frf` for time histories; a Dataset whose only
+        complex variable has dims ``("channel", "frequency")``, e.g. a text file of
+        complex FRF values, is taken as the FRFs of its channels to one reference).
     frf_type : str, optional
         ``receptance``, ``mobility``, ``accelerance`` or ``other`` when the object does
         not state it (``attrs["frf_type"]`` or ``attrs["kind"]``) and the channel
@@ -113,8 +115,10 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
         Named ``frf`` with coordinates ``node``, ``direction``, ``quantity``, ``units``
         on ``response``; ``reference_node``, ``reference_direction``,
         ``reference_quantity``, ``reference_units`` on ``reference``; frequency in Hz
-        ascending; ``attrs["frf_type"]``. Node labels such as ``"12:z"`` written by the
-        UFF reader are parsed into ``node=12, direction="+z"``; unknown nodes are -1.
+        ascending; ``attrs["frf_type"]`` (from the argument, the object's attrs, the
+        channel quantities or the ordinate units such as ``m/s^2/N``, in that order).
+        Node labels such as ``"12:z"`` written by the UFF reader are parsed into
+        ``node=12, direction="+z"``; unknown nodes are -1.
 
     Raises
     ------
