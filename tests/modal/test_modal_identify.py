@@ -171,3 +171,15 @@ def test_bad_inputs(msys):
     bad.values[0, 0, 10] = np.nan
     with pytest.raises(FormatError, match="non-finite value at response 1\\+z"):
         modal.identify(bad, 20, 230)
+
+
+def test_pure_noise_gives_no_reliable_mode(rng):
+    import xarray as xr
+
+    h = xr.DataArray(rng.standard_normal((2, 1, 400)) + 1j * rng.standard_normal((2, 1, 400)),
+                     dims=("response", "reference", "frequency"),
+                     coords={"response": ["a", "b"], "reference": ["r"],
+                             "frequency": np.arange(400.0)})
+    res = modal.identify(h, 10, 390)
+    assert not res.reliable.any(), res.to_dataframe()
+    assert res.shapes.shape == (res.n_modes, 2)
