@@ -21,12 +21,18 @@ meaningful one (wall time swings with the other processes' load).
 from __future__ import annotations
 
 import argparse
+import os
 import time
 import warnings
 
-import numpy as np
+# single-threaded BLAS for both libraries (unless the caller sets it): the comparison
+# then measures the algorithms, not thread scheduling on a shared machine
+for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
 
-from mvtk import modal
+import numpy as np  # noqa: E402
+
+from mvtk import modal  # noqa: E402
 
 
 def make_data(n_resp, n_ref, n_lines, seed=7):
