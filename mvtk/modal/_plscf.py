@@ -130,8 +130,9 @@ def plscf(
     T = _toeplitz_blocks(tau, P + 1, (ni, ni))
     sig = sig.reshape(2 * P + 1, no, 1, ni).transpose(1, 0, 2, 3)           # (no, lags, 1, ni)
     S = -np.stack([_toeplitz_blocks(sig[o], P + 1, (1, ni)) for o in range(no)])
-    W = scipy.linalg.solve_triangular(L, S.transpose(1, 0, 2).reshape(P + 1, no * S.shape[2]),
-                                      lower=True).reshape(P + 1, no, -1)   # (P+1, no, q)
+    rhs = np.ascontiguousarray(S.transpose(1, 0, 2)).reshape(P + 1, -1)
+    W = scipy.linalg.solve_triangular(L, rhs, lower=True, check_finite=False,
+                                      overwrite_b=True).reshape(P + 1, no, -1)  # (P+1,no,q)
     acc = np.zeros_like(T)
     want = set(orders.tolist())
     per_order = []
@@ -159,6 +160,11 @@ def plscf(
             lam = np.log(mu) / dt
         good = np.isfinite(lam)
         mu, lam = mu[good], lam[good]
+        # only physical poles in the band go further (the diagram marks the rest "x")
+        fn_p = np.abs(lam) / (2 * np.pi)
+        keep = ((-lam.real > 0) & (-lam.real <= crit.zeta_max * np.abs(lam))
+                & (fn_p >= f[0]) & (fn_p <= f[-1]))
+        mu, lam = mu[keep], lam[keep]
         # participation vectors: left null vectors of D(mu) = sum alpha_r mu^r
         # (alpha_p = I), from a batched SVD of the n_i x n_i matrices
         if ni > 1 and mu.size:
@@ -168,6 +174,6 @@ def plscf(
             vec = np.conj(np.linalg.svd(dmat)[2][:, -1, :])
         else:
             vec = np.ones((mu.size, 1), complex)
-        per_order.append((p, lam[good], vec))
+        per_order.append((p, lam, vec))
     ind = cmif(H)
     return poles_to_diagram("pLSCF", per_order, (f[0], f[-1]), f, ind, crit)
