@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import scipy.linalg
 
@@ -135,7 +138,7 @@ def plscf(
                                       overwrite_b=True).reshape(P + 1, no, -1)  # (P+1,no,q)
     acc = np.zeros_like(T)
     want = set(orders.tolist())
-    per_order = []
+    comps = []
     for r in range(P + 1):
         acc += W[r].T @ W[r]
         p = r
@@ -154,7 +157,15 @@ def plscf(
             comp[:-ni, ni:] = np.eye((p - 1) * ni)
         blocks = alpha.reshape(p, ni, ni)
         comp[-ni:, :] = -np.concatenate([b.T for b in blocks], axis=1)
-        mu = scipy.linalg.eigvals(comp, overwrite_a=True, check_finite=False)
+        comps.append((p, blocks, comp))
+    # the eigenvalue problems of the orders are independent: LAPACK releases the GIL, so
+    # they run on the available cores
+    workers = max(1, min(4, os.cpu_count() or 1, len(comps)))
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        mus = list(pool.map(
+            lambda c: scipy.linalg.eigvals(c[2], overwrite_a=True, check_finite=False), comps))
+    per_order = []
+    for (p, blocks, _), mu in zip(comps, mus):
         mu = mu[mu.imag > 0]  # one of each conjugate pair (real poles are not modes)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             lam = np.log(mu) / dt

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.spatial.distance import squareform
 
 from ..errors import ParameterError
 
@@ -180,9 +182,6 @@ class SelectedPoles:
 
 
 def _cluster(f, z, crit: ClusterCriteria):
-    from scipy.cluster.hierarchy import fcluster, linkage
-    from scipy.spatial.distance import squareform
-
     n = f.size
     if n == 1:
         return np.array([1])
