@@ -3,8 +3,9 @@
 From measured vibration data to a validated reduced model and a verified active
 vibration controller:
 
-``mvtk.io``  -> ``mvtk.signal`` -> ``mvtk.damping``;
-``mvtk.fe``  -> ``mvtk.updating`` -> ``mvtk.reduction`` -> ``mvtk.control``;
+``mvtk.io``  -> ``mvtk.signal`` -> ``mvtk.damping`` and ``mvtk.modal``;
+``mvtk.fe``  -> ``mvtk.correlation`` / ``mvtk.updating`` -> ``mvtk.reduction`` ->
+``mvtk.control``;
 ``mvtk.validation``, ``mvtk.report`` and ``mvtk.study`` wire it together;
 ``mvtk.scale`` runs the same calls on dask (campaigns, parameter studies).
 
@@ -28,8 +29,10 @@ _SUBPACKAGES = (
     "io",
     "signal",
     "damping",
+    "modal",
     "fe",
     "updating",
+    "correlation",
     "reduction",
     "control",
     "validation",

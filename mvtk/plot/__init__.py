@@ -9,6 +9,7 @@ from ._figures import (
     plot_spectra,
     plot_time_responses,
 )
+from ._modal import plot_automac, plot_frf_synthesis, plot_stabilisation
 
 __all__ = [
     "figure_to_png",
@@ -20,4 +21,7 @@ __all__ = [
     "plot_mac",
     "plot_paired_shapes",
     "plot_test_on_mesh",
+    "plot_stabilisation",
+    "plot_frf_synthesis",
+    "plot_automac",
 ]

@@ -1,0 +1,254 @@
+"""``identify``: FRF matrix -> stabilisation diagram -> selected poles -> LSFD -> modes."""
+
+from __future__ import annotations
+
+import numpy as np
+import xarray as xr
+
+from ._lsfd import lsfd, synthesise
+from ._plscf import band_frf, plscf
+from ._quality import mpc, mpd
+from ._result import IdentifiedModes
+from ._stabilisation import (
+    ClusterCriteria,
+    SelectedPoles,
+    StabilityCriteria,
+    poles_near,
+    select_poles,
+)
+
+__all__ = ["identify", "dof_labels", "shapes_array"]
+
+
+def dof_labels(nodes, directions, names) -> list[str]:
+    """``"<node><direction>"`` labels (response names where the node is unknown)."""
+    labels = [f"{int(n)}{d}" if int(n) >= 0 else str(nm)
+              for n, d, nm in zip(nodes, directions, names)]
+    if len(set(labels)) != len(labels):
+        labels = [str(nm) for nm in names]
+    return labels
+
+
+def shapes_array(values, fn_hz, zeta, labels, nodes, directions, normalisation, source):
+    """A ``("mode", "dof")`` DataArray on the conventions."""
+    return xr.DataArray(
+        values, dims=("mode", "dof"),
+        coords={"mode": np.arange(1, len(fn_hz) + 1), "fn_hz": ("mode", np.asarray(fn_hz)),
+                "zeta": ("mode", np.asarray(zeta)), "dof": labels,
+                "node": ("dof", np.asarray(nodes, dtype=np.int64)),
+                "direction": ("dof", np.asarray(directions, dtype=str))},
+        attrs={"normalisation": normalisation, "source": source}, name="shape",
+    )
+
+
+def _rotate_real(psi):
+    """Rotate each complex shape onto its best-fit line; return (rotated complex, real)."""
+    out = np.empty_like(psi)
+    for k, row in enumerate(psi):
+        u = np.column_stack([row.real, row.imag])
+        _, _, vt = np.linalg.svd(u, full_matrices=False)
+        theta = np.arctan2(vt[0, 1], vt[0, 0])
+        out[k] = row * np.exp(-1j * theta)
+        i = np.argmax(np.abs(out[k].real))
+        if out[k].real[i] < 0:
+            out[k] = -out[k]
+    return out, out.real.copy()
+
+
+def _driving_point(h):
+    for i in range(h.sizes["reference"]):
+        rn, rd = int(h["reference_node"].values[i]), str(h["reference_direction"].values[i])
+        for o in range(h.sizes["response"]):
+            same = (rn >= 0 and int(h["node"].values[o]) == rn
+                    and str(h["direction"].values[o]).lstrip("+") == rd.lstrip("+") and rd)
+            if same or str(h["response"].values[o]) == str(h["reference"].values[i]):
+                return o, i
+    return None
+
+
+def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None,
+                  contribution=None, min_contribution=0.1, local=None, min_local=0.8):
+    """``reliable`` and ``reason`` per mode from the stated criteria."""
+    reliable, reason = [], []
+    contribution = np.full(len(fn), np.nan) if contribution is None else contribution
+    local = np.full(len(fn), np.nan) if local is None else local
+    for f, z, m, c, q, loc in zip(fn, zeta, mpc_v, count, contribution, local):
+        why = []
+        if np.isfinite(loc) and loc < min_local:
+            why.append(f"measured vs synthesised FRF correlation {loc:.2f} < {min_local:g} "
+                       "around the mode (noise fitted?)")
+        if np.isfinite(q) and q < min_contribution:
+            why.append(f"weak: the mode makes {q:.0%} of |H| at its frequency "
+                       f"(< {min_contribution:.0%})")
+        if df_hz is not None and 0 < z and 2 * z * f < df_hz:
+            why.append(f"half-power bandwidth {2 * z * f:.3g} Hz < line spacing "
+                       f"{df_hz:.3g} Hz: damping not resolved")
+        if c < need:
+            why.append(f"stable in {c} model orders (< {need:g})")
+        if not (0 < z <= zeta_max):
+            why.append(f"damping {z:.3g} outside (0, {zeta_max:g}]")
+        if f < band[0] * (1 + edge) or f > band[1] * (1 - edge):
+            why.append(f"within {edge:.0%} of the band edge {band[0]:g}..{band[1]:g} Hz")
+        if np.isfinite(m) and m < 0.5:
+            why.append(f"shape not collinear (MPC {m:.2f} < 0.5)")
+        reliable.append(not why)
+        reason.append("; ".join(why) if why else "ok")
+    return np.array(reliable, bool), tuple(reason)
+
+
+def identify(
+    frf,
+    fmin: float | None = None,
+    fmax: float | None = None,
+    *,
+    orders=None,
+    fn_hz=None,
+    stability: StabilityCriteria | None = None,
+    clustering: ClusterCriteria | None = None,
+    residuals: bool = True,
+) -> IdentifiedModes:
+    """Identify modes from an FRF matrix: pLSCF poles, automatic selection, LSFD shapes.
+
+    Parameters
+    ----------
+    frf : xarray.DataArray or Dataset
+        FRF matrix ``("response", "reference", "frequency")`` (conventions page), e.g.
+        from :func:`frf_matrix` or :func:`mvtk.io.read` on UFF 58 records.
+    fmin, fmax : float, optional
+        Analysis band in Hz (default: the whole FRF).
+    orders : iterable of int, optional
+        pLSCF model orders (default ``2..max(20, 64 // n_reference)`` -- every order
+        gives ``n_reference`` poles).
+    fn_hz : sequence of float, optional
+        Select the poles nearest these frequencies (see :func:`poles_near`) instead of
+        the automatic clustering.
+    stability, clustering : optional
+        Tolerances of the diagram (:class:`StabilityCriteria`) and of the automatic
+        selection (:class:`ClusterCriteria`).
+    residuals : bool
+        Fit lower and upper residuals in LSFD (default True).
+
+    Returns
+    -------
+    IdentifiedModes
+        Table with quality (``reliable``/``reason``: stable in too few orders, damping
+        outside ``(0, zeta_max]``, a pole within 1 % of a band edge, MPC < 0.5, a weak
+        mode whose own FRF is < 10 % of the measured ``|H|`` at its frequency, a
+        measured vs synthesised correlation < 0.8 within ``fn +- max(5 lines, 2 zeta
+        fn)`` (poles fitted to noise), a
+        half-power bandwidth ``2 zeta fn`` narrower than the line spacing), complex
+        and real shapes at the response DOFs (mass-normalised when a driving point
+        exists), synthesised FRFs and their correlation with the measured ones.
+
+    Raises
+    ------
+    ParameterError
+        Bad band or orders, or no pole near a requested frequency.
+    """
+    stab = stability or StabilityCriteria()
+    clus = clustering or ClusterCriteria()
+    h = band_frf(frf, fmin, fmax)
+    ni = h.sizes["reference"]
+    if orders is None:
+        orders = range(2, max(20, 64 // ni) + 1)
+    diagram = plscf(h, orders=orders, criteria=stab)
+    if fn_hz is not None:
+        sel = poles_near(diagram, fn_hz)
+    else:
+        sel = select_poles(diagram, clus)
+    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals)
+
+
+def _contribution(fit, h):
+    """``||H_m(f_n)|| / ||H_measured(f_n)||`` (Frobenius over all FRFs) of each mode."""
+    f = h["frequency"].values
+    out = np.empty(fit.pole.size)
+    for m, (lam, A) in enumerate(zip(fit.pole, fit.residue)):
+        k = int(np.argmin(np.abs(f - abs(lam) / (2 * np.pi))))
+        iw = 2j * np.pi * f[k]
+        hm = (A / (iw - lam) + np.conj(A) / (iw - np.conj(lam))) * iw**fit.power
+        den = np.linalg.norm(h.values[:, :, k])
+        out[m] = np.linalg.norm(hm) / den if den > 0 else np.nan
+    return out
+
+
+def _local_correlation(Hm, Hs, f, fn, zeta):
+    """Measured vs synthesised correlation over ``fn +- max(5 lines, 2 zeta fn)``."""
+    df = float(np.median(np.diff(f)))
+    out = np.empty(len(fn))
+    for m, (f0, z) in enumerate(zip(fn, zeta)):
+        half = max(5 * df, 2 * abs(z) * f0)
+        k = (f >= f0 - half) & (f <= f0 + half)
+        a, b = Hm[..., k], Hs[..., k]
+        den = np.sum(np.abs(a) ** 2) * np.sum(np.abs(b) ** 2)
+        out[m] = np.abs(np.sum(a * np.conj(b))) ** 2 / den if den > 0 else np.nan
+    return out
+
+
+def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True):
+    """LSFD on the selected poles and everything the result table needs."""
+    f = h["frequency"].values
+    kind = h.attrs.get("frf_type", "other")
+    fit = lsfd(h.values, f, sel.pole, kind, residuals=residuals)
+    nm = sel.pole.size
+    no = h.sizes["response"]
+    fn = np.abs(sel.pole) / (2 * np.pi)
+    zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
+    psi = np.zeros((nm, no), complex)
+    part = np.zeros((nm, h.sizes["reference"]), complex)
+    for m in range(nm):
+        u, s, vh = np.linalg.svd(fit.residue[m], full_matrices=False)
+        psi[m] = u[:, 0] * s[0]
+        part[m] = np.conj(vh[0])
+    dp = _driving_point(h)
+    if dp is not None and nm:
+        o, i = dp
+        wd = sel.pole.imag
+        scaled = fit.residue[:, :, i] * (2j * wd)[:, None]       # phi_o phi_i
+        phid = np.sqrt(scaled[:, o])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            phi = scaled / phid[:, None]
+        rot, real = _rotate_real(phi)
+        cplx = phi / np.sqrt(2j * wd)[:, None]
+        norm = "mass"
+    else:
+        amp = np.abs(psi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
+        idx = np.argmax(np.abs(psi), axis=1) if nm else np.zeros(0, int)
+        ph = np.exp(-1j * np.angle(psi[np.arange(nm), idx]))[:, None] if nm else 1
+        cplx = psi * ph / np.where(amp > 0, amp, 1)
+        rot, real = _rotate_real(cplx)
+        real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
+        norm = "unit_max"
+    labels = dof_labels(h["node"].values, h["direction"].values, h["response"].values)
+    shp = shapes_array(cplx, fn, zeta, labels, h["node"].values, h["direction"].values,
+                       norm, "pLSCF+LSFD")
+    rshp = shapes_array(real, fn, zeta, labels, h["node"].values, h["direction"].values,
+                        norm, "pLSCF+LSFD")
+    syn_v = synthesise(fit, f)
+    syn = h.copy(data=syn_v)
+    syn.name = "frf_synthesised"
+    Hm = h.values
+    num = np.abs(np.sum(Hm * np.conj(syn_v), axis=(1, 2))) ** 2
+    den = np.sum(np.abs(Hm) ** 2, axis=(1, 2)) * np.sum(np.abs(syn_v) ** 2, axis=(1, 2))
+    corr = xr.DataArray(np.where(den > 0, num / np.where(den > 0, den, 1), 0.0),
+                        dims=("response",), coords={"response": h["response"].values},
+                        name="correlation")
+    tot_num = np.abs(np.sum(Hm * np.conj(syn_v))) ** 2
+    tot_den = np.sum(np.abs(Hm) ** 2) * np.sum(np.abs(syn_v) ** 2)
+    corr.attrs["overall"] = float(tot_num / tot_den) if tot_den > 0 else 0.0
+    mpc_v = mpc(cplx) if no > 1 else np.ones(nm)
+    mpd_v = mpd(cplx) if no > 1 else np.zeros(nm)
+    need = clus.min_count
+    df = float(np.median(np.diff(f)))
+    contrib = _contribution(fit, h)
+    local = _local_correlation(h.values, syn_v, f, fn, zeta)
+    reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
+                                     stab.zeta_max, df_hz=df, contribution=contrib,
+                                     local=local)
+    return IdentifiedModes(
+        method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
+        real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
+        stability_count=sel.count, reliable=reliable, reason=reason, frf=h,
+        synthesised=syn, correlation=corr, residue=fit.residue,
+        lower_residual=fit.lower, upper_residual=fit.upper, diagram=diagram,
+    )

@@ -1,0 +1,112 @@
+"""The identified-modes result: table with quality, shapes, synthesis, AutoMAC."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from ._quality import mac
+from ._stabilisation import StabilisationDiagram
+
+__all__ = ["IdentifiedModes"]
+
+
+@dataclass(frozen=True)
+class IdentifiedModes:
+    """Modes identified from test data, with the evidence and quality of each.
+
+    Attributes
+    ----------
+    method : str
+        ``"pLSCF+LSFD"`` or ``"SSI-cov"``.
+    fn_hz, zeta : numpy.ndarray
+        Undamped natural frequency (Hz) and damping ratio of each mode.
+    pole : numpy.ndarray of complex
+        ``-zeta w_n + i w_d`` in rad/s.
+    shapes : xarray.DataArray
+        Complex shapes ``("mode", "dof")``; ``attrs["normalisation"]`` is ``"mass"``
+        (unit modal A, residue ``A_oi = phi_o phi_i / (2 i w_d)`` scaled from a driving
+        point) or ``"unit_max"`` (largest component 1).
+    real_shapes : xarray.DataArray
+        Real normal shapes ``("mode", "dof")``: each complex shape rotated onto its
+        best-fit line in the complex plane and its real part kept; mass-normalised when
+        a driving point scaled them, else unit maximum.
+    participation : numpy.ndarray, shape (n_modes, n_reference) or None
+        Modal participation of the references (pLSCF).
+    mpc, mpd : numpy.ndarray
+        Modal phase collinearity (0..1) and mean phase deviation (deg) of the shapes.
+    stability_count : numpy.ndarray of int
+        Model orders in which the mode was fully stable.
+    reliable : numpy.ndarray of bool
+    reason : tuple of str
+        Why a mode is not reliable (``"ok"`` otherwise).
+    frf, synthesised : xarray.DataArray or None
+        Measured FRFs in the band and the FRFs of the identified model (pLSCF+LSFD).
+    correlation : xarray.DataArray or None
+        Per-response correlation of measured and synthesised FRFs over references and
+        lines, ``|sum H_m conj(H_s)|^2 / (sum |H_m|^2 sum |H_s|^2)``; ``attrs["overall"]``
+        is the same over all FRFs.
+    residue : numpy.ndarray or None
+        ``(n_modes, n_response, n_reference)`` receptance residues.
+    lower_residual, upper_residual : numpy.ndarray or None
+        Real residual terms ``(n_response, n_reference)`` of the LSFD fit.
+    diagram : StabilisationDiagram
+        The stabilisation diagram the poles were selected from.
+    """
+
+    method: str
+    fn_hz: np.ndarray
+    zeta: np.ndarray
+    pole: np.ndarray
+    shapes: xr.DataArray
+    real_shapes: xr.DataArray
+    participation: np.ndarray | None
+    mpc: np.ndarray
+    mpd: np.ndarray
+    stability_count: np.ndarray
+    reliable: np.ndarray
+    reason: tuple
+    frf: xr.DataArray | None
+    synthesised: xr.DataArray | None
+    correlation: xr.DataArray | None
+    residue: np.ndarray | None
+    lower_residual: np.ndarray | None
+    upper_residual: np.ndarray | None
+    diagram: StabilisationDiagram
+
+    @property
+    def n_modes(self) -> int:
+        """Number of identified modes."""
+        return int(self.fn_hz.size)
+
+    def to_dataframe(self) -> pd.DataFrame:
+        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count reliable reason``."""
+        return pd.DataFrame({
+            "mode": np.arange(1, self.n_modes + 1),
+            "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
+            "stability_count": self.stability_count, "reliable": self.reliable,
+            "reason": list(self.reason),
+        })
+
+    def automac(self, real: bool = False) -> xr.DataArray:
+        """AutoMAC of the (complex, or real) shapes, dims ``("mode", "mode_2")``."""
+        s = self.real_shapes if real else self.shapes
+        m = mac(s.values)
+        modes = s["mode"].values
+        return xr.DataArray(m, dims=("mode", "mode_2"),
+                            coords={"mode": modes, "mode_2": modes}, name="automac")
+
+    def _repr_html_(self) -> str:
+        head = (f"<b>IdentifiedModes</b> ({self.method}, {self.n_modes} modes, band "
+                f"{self.diagram.band_hz[0]:g}..{self.diagram.band_hz[1]:g} Hz")
+        if self.correlation is not None:
+            head += f", FRF correlation {self.correlation.attrs['overall']:.3f}"
+        head += ")"
+        return head + self.to_dataframe().to_html(index=False, float_format=lambda v: f"{v:.4g}")
+
+    def __repr__(self) -> str:
+        return f"IdentifiedModes({self.method}, {self.n_modes} modes)\n" + \
+            self.to_dataframe().to_string(index=False)
