@@ -9,5 +9,7 @@ under a hash of its inputs.
 from ._config import Study, load_study
 from ._report import study_checks
 from ._run import STAGES, StudyResult, run
+from ._schema import CONTROLLER_SCHEMAS, SCHEMA, Key, Table
 
-__all__ = ["Study", "StudyResult", "STAGES", "load_study", "run", "study_checks"]
+__all__ = ["Study", "StudyResult", "STAGES", "SCHEMA", "CONTROLLER_SCHEMAS", "Key", "Table",
+           "load_study", "run", "study_checks"]
