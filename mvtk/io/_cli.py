@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-
-from ..errors import MvtkError
 
 __all__ = ["add_parser", "parse_option", "summary"]
 
@@ -45,18 +42,18 @@ def summary(ds) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
+    """Run ``mvtk read``; errors propagate to :func:`mvtk.cli.main` (one line, exit 2)."""
+    from .._run_cli import check_output_file
     from . import read, write
 
+    if args.output:
+        check_output_file(args.output, "--output")
     options = dict(args.set or [])
-    try:
-        ds = read(args.path, format=args.format, **options)
-        print(summary(ds))
-        if args.output:
-            write(ds, args.output)
-            print(f"written: {args.output}")
-    except (MvtkError, FileNotFoundError) as err:
-        print(f"mvtk read: {err}", file=sys.stderr)
-        return 2
+    ds = read(args.path, format=args.format, **options)
+    print(summary(ds))
+    if args.output:
+        write(ds, args.output)
+        print(f"written: {args.output}")
     return 0
 
 

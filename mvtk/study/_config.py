@@ -138,13 +138,18 @@ def load_study(path: str | Path) -> Study:
     if "structure" not in raw:
         raise ConfigError(f"{p}: missing [structure] section (file = \"structure.toml\" "
                           "or the structure tables inline)")
-    cfg = validate(raw, src, inline_structure=inline)
+    tables = STRUCTURE_TABLES
+    up = raw.get("updating")
+    if inline and isinstance(up, Mapping) and up.get("builder") is not None:
+        # a custom builder reads a description of its own: every non-study table
+        tables = tuple(k for k in raw if k not in SCHEMA or k == "structure")
+    cfg = validate(raw, src, inline_structure=inline, structure_tables=tables)
     cfg.setdefault("study", {})
     root = p.resolve().parent
     if inline:
         structure_file = None
-        structure = {k: copy.deepcopy(raw[k]) for k in STRUCTURE_TABLES if k in raw}
-        cfg = {k: v for k, v in cfg.items() if k not in STRUCTURE_TABLES}
+        structure = {k: copy.deepcopy(raw[k]) for k in tables if k in raw}
+        cfg = {k: v for k, v in cfg.items() if k not in tables}
     else:
         structure_file = _file(root, cfg["structure"]["file"], "structure")
         structure = read_toml(structure_file, "structure file")

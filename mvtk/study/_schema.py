@@ -288,9 +288,9 @@ SCHEMA: dict[str, Table] = {
         "Sensitivity-based updating (mvtk.updating.update): give targets_hz or targets.",
         {"targets_hz": _freqs("Measured natural frequencies, ascending (mode order).", None),
          "targets": Key("tables", "Targets as tables (fn_hz, weight, mode, label, shape, "
-                        "kind).", None, table=_TARGET),
+                        "kind).", None, table=_TARGET, min_length=1),
          "parameters": Key("tables", "Parameters to update ([[updating.parameters]]).",
-                           REQUIRED, table=_PARAMETER),
+                           REQUIRED, table=_PARAMETER, min_length=1),
          "max_iter": Key("int", "Maximum solver iterations.", 30, minimum=1),
          "n_modes": Key("int", "Model modes solved per evaluation (None: max(2n, n+4)).",
                         None, minimum=1),
@@ -315,7 +315,7 @@ SCHEMA: dict[str, Table] = {
         "Craig-Bampton super element (mvtk.reduction.craig_bampton).",
         {"retained": Key("tables", "Retained items ([[reduction.retained]]); plain node "
                          "set names or [x, y, z] points are accepted too.", REQUIRED,
-                         table=_RETAINED),
+                         table=_RETAINED, min_length=1),
          "n_modes": Key("int", "Fixed-interface modes (0: Guyan; None: 10 unless "
                         "mass_fraction or f_cut_hz is given).", None, minimum=0),
          "mass_fraction": Key("number", "Keep modes up to this effective-mass fraction "
@@ -471,6 +471,9 @@ def _check_value(k: Key, v: Any, where: str, source: str) -> Any:
     if t == "tables":
         if not isinstance(v, list):
             raise bad
+        if len(v) < k.min_length:
+            raise ConfigError(f"{loc}{where}: expected at least {k.min_length} table(s) "
+                              f"([[{where}]]), got {v!r}")
         if k.table is None:  # items validated by the caller (controllers by type)
             for i, item in enumerate(v):
                 if not isinstance(item, Mapping):
@@ -525,7 +528,8 @@ def validate_table(d: Mapping, table: Table, where: str, source: str = "") -> di
     return out
 
 
-def validate(cfg: Mapping, source: str = "", inline_structure: bool = False) -> dict:
+def validate(cfg: Mapping, source: str = "", inline_structure: bool = False,
+             structure_tables=STRUCTURE_TABLES) -> dict:
     """Validate a parsed study TOML against :data:`SCHEMA`.
 
     Parameters
@@ -546,7 +550,7 @@ def validate(cfg: Mapping, source: str = "", inline_structure: bool = False) -> 
         unchanged under their own names).
     """
     out: dict[str, Any] = {}
-    accepted = set(SCHEMA) | (set(STRUCTURE_TABLES) if inline_structure else set())
+    accepted = set(SCHEMA) | (set(structure_tables) if inline_structure else set())
     for name in cfg:
         if name not in accepted:
             loc = f"{source}: " if source else ""
