@@ -382,7 +382,11 @@ SCHEMA: dict[str, Table] = {
 
 # --------------------------------------------------------------------------- validation
 def _suggest(key: str, accepted) -> str:
-    close = difflib.get_close_matches(str(key), [str(a) for a in accepted], n=1, cutoff=0.75)
+    """`` (did you mean 'x'?)`` for a close match (or a transposition) of ``key``."""
+    names = [str(a) for a in accepted]
+    close = difflib.get_close_matches(str(key), names, n=1, cutoff=0.75)
+    if not close:
+        close = [a for a in names if sorted(a.lower()) == sorted(str(key).lower())][:1]
     return f" (did you mean {close[0]!r}?)" if close else ""
 
 
