@@ -72,10 +72,10 @@ def _os_message(err: OSError) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the ``mvtk`` command line; returns the exit status (see the module docstring)."""
-    parser = build_parser()
     try:
+        parser = build_parser()
         args = parser.parse_args(argv)
-    except KeyboardInterrupt:  # pragma: no cover - during start-up
+    except KeyboardInterrupt:  # during start-up (imports)
         print("mvtk: interrupted", file=sys.stderr)
         return 130
     if args.command is None:
