@@ -19,7 +19,6 @@ _REPLACE = (
     ("t_end_s = 6.0", "t_end_s = 1.5"),
     ("fs_out = 500.0", "fs_out = 200.0"),
     ("uncertainty_cov_rel = 0.20", "uncertainty_cov_rel = 0.90"),
-    ("max_iter = 30", "max_iter = 8"),
 )
 
 
