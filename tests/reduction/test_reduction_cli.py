@@ -65,6 +65,10 @@ def study_file(tmp_path_factory) -> Path:
 def test_reduce_json_paper_shape(study_file, capsys):
     assert main(["reduce", str(study_file), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "schemas" / "reduce.schema.json").read_text())
+    jsonschema.validate(out, schema, cls=jsonschema.Draft202012Validator)
+    assert out["schema_version"] == "mvtk.reduce/1" and not out["updated_model"]
     sizes = {row["quantity"]: row for row in out["sizes"]}
     # 5 retained nodes (the clamp node has no free DOF), 10 modes: the paper's 40 DOF
     assert sizes["Number of nodes"]["se"] == 5

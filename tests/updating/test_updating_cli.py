@@ -50,6 +50,9 @@ def test_cli_inline_structure_json_and_out(tmp_path, capsys):
     code = main(["update", str(path), "--json", "--out", str(out)])
     assert code == 0
     res = json.loads(capsys.readouterr().out)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "schemas" / "update.schema.json").read_text())
+    jsonschema.validate(res, schema, cls=jsonschema.Draft202012Validator)
     assert res["success"] and res["identifiable"]
     assert res["updated_values"]["materials.steel.E"] == pytest.approx(2.1e11, rel=5e-3)
     assert max(abs(r["error_pct"]) for r in res["residuals"]) < 1e-3
