@@ -120,8 +120,10 @@ class ReadTracker:
 
     A read is ``(kind, path)``: ``kind`` is ``"value"`` (the value at ``path``, or the
     fact that it is a table or absent), ``"full"`` (the whole subtree, for iteration),
-    ``"truth"`` (whether it is non-empty), or ``"file"`` (the SHA-256 of an input file,
-    ``path`` = its resolved name).
+    ``"keys"`` (the key names of a table), ``"truth"`` (whether it is non-empty),
+    ``"structure"`` (the structure description), ``"measurement_file"`` (the SHA-256 of
+    the file of a test, so a moved copy of the same data still matches) or ``"file"``
+    (the SHA-256 of a file, ``path`` = its resolved name).
     """
 
     def __init__(self, study) -> None:
@@ -132,6 +134,11 @@ class ReadTracker:
         if kind == "file":
             p = Path(path[0])
             return _file_sha256(p) if p.is_file() else _ABSENT
+        if kind == "measurement_file":  # by content, wherever the study says it is
+            p = self.study.measurement_files.get(path[0])
+            if p is None or not p.is_file():
+                return _ABSENT
+            return {"name": p.name, "sha256": _file_sha256(p)}
         if kind == "structure":
             return to_jsonable(self.study.structure)
         node: Any = self.study.config
@@ -142,6 +149,8 @@ class ReadTracker:
                 return _ABSENT
         if kind == "truth":
             return bool(node)
+        if kind == "keys":
+            return sorted(map(str, node)) if isinstance(node, Mapping) else _ABSENT
         if kind == "full" or not isinstance(node, Mapping):
             return {"value": to_jsonable(node)}
         return {"table": True}
@@ -236,9 +245,9 @@ class TrackedStudy:
     @property
     def measurement_files(self) -> dict[str, Path]:
         files = self._study.measurement_files
-        self._tracker.record("full", ("measurements",))
-        for f in files.values():
-            self._tracker.record("file", (str(f),))
+        self._tracker.record("keys", ("measurements",))
+        for test in files:
+            self._tracker.record("measurement_file", (test,))
         return dict(files)
 
 

@@ -203,3 +203,31 @@ def test_output_folder_checked_before_work(tmp_path):
         check_output_dir("/proc/mvtk-out")
     with pytest.raises(ConfigError, match="cannot create the output folder"):
         check_output_dir(f / "sub")
+
+
+def test_measurement_files_are_keyed_by_content_and_name(tmp_path, study):
+    """A copy of the study with absolute paths to the same files reuses the ingest-like
+    stage; a changed file reruns it."""
+    import dataclasses
+    import shutil
+
+    cache = StageCache(tmp_path / "c")
+    calls = []
+
+    def compute(s):
+        calls.append(1)
+        return {"files": sorted(p.name for p in s.measurement_files.values())}, None
+
+    def cached(st):
+        tracker = ReadTracker(st)
+        return cache.get("ingest", "k", lambda: compute(TrackedStudy(st, tracker)), tracker)
+
+    cached(study)
+    moved = {k: tmp_path / p.name for k, p in study.measurement_files.items()}
+    for k, p in study.measurement_files.items():
+        shutil.copy(p, moved[k])
+    cached(dataclasses.replace(study, measurement_files=moved))
+    assert len(calls) == 1
+    moved["decay"].write_bytes(moved["decay"].read_bytes() + b"\n")
+    cached(dataclasses.replace(study, measurement_files=moved))
+    assert len(calls) == 2
