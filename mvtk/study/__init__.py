@@ -3,7 +3,8 @@
 ``mvtk.study.run(study_path, out_dir)`` chains ingest -> FE -> damping -> updating ->
 (optional Monte-Carlo uncertainty of the updated model, ``[uncertainty]``) ->
 Craig-Bampton SE -> controllers -> HTML report, caching each stage in ``out_dir/cache``
-under a hash of its inputs.
+under a key derived from what the stage read (verified on load; see docs/study.md).
+``SCHEMA`` is the one declarative schema of the study file, used by every command.
 """
 
 from ._config import Study, load_study

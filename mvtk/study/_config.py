@@ -1,6 +1,9 @@
 """The study TOML: parsing, validation and path resolution.
 
-Schema (see ``data/smart_beam/study.toml`` for a complete, commented example)::
+Every key is described (type, default, units, doc) by :data:`mvtk.study.SCHEMA`
+(:mod:`mvtk.study._schema`), against which :func:`load_study` validates the file; this
+module adds the cross-key rules and resolves the files. Overview (see
+``data/smart_beam/study.toml`` for a complete, commented example)::
 
     [study]            name, synthetic (bool)
     [structure]        file (structure TOML, relative to the study file)

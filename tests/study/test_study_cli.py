@@ -158,3 +158,25 @@ def test_sigint_during_a_run(tmp_path):
     assert proc.returncode == 130, err
     assert err.strip().splitlines()[-1] == "mvtk run: interrupted"
     assert "Traceback" not in err
+
+
+@pytest.mark.slow
+def test_every_study_command_accepts_the_project_study(tmp_path, capsys):
+    """Issue 16: `mvtk reduce` and `mvtk control` refused data/smart_beam/study.toml
+    (plant_modes, actuator_limit_v, patch, control_rate_hz unknown), `control` after
+    running every stage. All four commands now read it through the one schema."""
+    jsonschema = pytest.importorskip("jsonschema")
+    cache = tmp_path / "out"
+    for command in ("control", "reduce", "update"):
+        assert main([command, str(STUDY), "--cache", str(cache), "--json"]) == 0
+        doc = json.loads(capsys.readouterr().out)
+        schema = json.loads((ROOT / "schemas" / f"{command}.schema.json").read_text())
+        jsonschema.validate(doc, schema, cls=jsonschema.Draft202012Validator)
+        assert doc["schema_version"] == f"mvtk.{command}/1"
+    assert doc["cached"] is True  # update: served from the cache control filled
+    # and `mvtk run` into the same folder reuses those stages
+    from mvtk.study import run
+
+    res = run(STUDY, cache, progress=False, report=False)
+    assert {"ingest", "fe", "updating", "damping", "reduction", "control"} <= set(
+        res.cache_hits)
