@@ -143,6 +143,7 @@ def test_keyboard_interrupt_is_exit_130(capsys, monkeypatch):
     assert capsys.readouterr().err == "mvtk modes: interrupted\n"
 
 
+@pytest.mark.slow
 def test_sigint_during_a_run(tmp_path):
     """Issue 16: Ctrl-C gave a traceback."""
     proc = subprocess.Popen([sys.executable, "-m", "mvtk", "run", str(STUDY), "--out",
