@@ -42,18 +42,28 @@ def summary(ds) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    """Run ``mvtk read``; errors propagate to :func:`mvtk.cli.main` (one line, exit 2)."""
+    """Run ``mvtk read``: 0, or 2 with one line naming the file on any input error."""
+    import sys
+
     from .._run_cli import check_output_file
+    from ..errors import MvtkError
     from . import read, write
 
-    if args.output:
-        check_output_file(args.output, "--output")
-    options = dict(args.set or [])
-    ds = read(args.path, format=args.format, **options)
-    print(summary(ds))
-    if args.output:
-        write(ds, args.output)
-        print(f"written: {args.output}")
+    try:
+        if args.output:
+            check_output_file(args.output, "--output")  # before reading
+        options = dict(args.set or [])
+        ds = read(args.path, format=args.format, **options)
+        print(summary(ds))
+        if args.output:
+            write(ds, args.output)
+            print(f"written: {args.output}")
+    except (MvtkError, OSError) as err:
+        msg = " ".join(str(err).split("\n"))
+        if isinstance(err, OSError) and err.filename is not None and err.strerror:
+            msg = f"{err.filename}: {err.strerror}"
+        print(f"mvtk read: error: {msg}", file=sys.stderr)
+        return 2
     return 0
 
 
