@@ -124,8 +124,11 @@ def test_cli_runs_the_project_study_layout(tmp_path, capsys):
     (tmp_path / "coarse.toml").write_text(tomli_w.dumps(coarse))
     text = study_file.read_text()
     assert 'file = "../structures/smart_beam.toml"' in text
-    (tmp_path / "study.toml").write_text(
-        text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"'))
+    text = text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"')
+    for name in ("impact", "broadband", "decay"):  # the one schema checks every file
+        f = f"SYNTHETIC_smart_beam_{name}.csv"
+        text = text.replace(f'"{f}"', f'"{(study_file.parent / f).as_posix()}"')
+    (tmp_path / "study.toml").write_text(text)
     assert main(["update", str(tmp_path / "study.toml"), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert max(abs(r["error_pct"]) for r in res["residuals"]) < 0.5
