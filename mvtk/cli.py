@@ -10,13 +10,23 @@ Each stage contributes its sub-command from a private ``_cli`` module exposing
 - ``mvtk reduce STUDY.toml``     (:mod:`mvtk.reduction`)
 - ``mvtk control STUDY.toml``    (:mod:`mvtk.control`)
 - ``mvtk run STUDY.toml --out DIR`` (:mod:`mvtk.study`)
+
+``update``, ``reduce``, ``control`` and ``run`` read the study file through the one
+schema of :mod:`mvtk.study` and run the stages they need through its cached pipeline.
+
+Exit status of every command: 0 success; 1 a check failed (``run``) or the update did
+not converge (``update``); 2 an error, reported as one line naming the file, key or
+path (any :class:`mvtk.errors.MvtkError` or operating-system error); 130 interrupted
+(Ctrl-C).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import importlib.util
+import os
 import sys
 
 from . import __version__
@@ -49,16 +59,49 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _one_line(text: str) -> str:
+    return " ".join(part.strip() for part in str(text).splitlines() if part.strip())
+
+
+def _os_message(err: OSError) -> str:
+    """``path: reason`` of an operating-system error (both paths of a rename)."""
+    reason = err.strerror or type(err).__name__
+    paths = [str(p) for p in (err.filename, err.filename2) if p is not None]
+    if paths:
+        return f"{' -> '.join(paths)}: {reason}"
+    return _one_line(str(err)) or reason
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    """Run the ``mvtk`` command line; returns the exit status (see the module docstring)."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+    except KeyboardInterrupt:  # during start-up (imports)
+        print("mvtk: interrupted", file=sys.stderr)
+        return 130
     if args.command is None:
         parser.print_help()
         return 0
+    prog = f"mvtk {args.command}"
     try:
         return int(args.func(args) or 0)
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
     except MvtkError as err:
-        print(f"mvtk {args.command}: error: {err}", file=sys.stderr)
+        print(f"{prog}: error: {_one_line(err)}", file=sys.stderr)
+        return 2
+    except BrokenPipeError:  # output piped into a command that stopped reading
+        with contextlib.suppress(OSError):
+            sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - silence the final flush
+        return 0
+    except OSError as err:
+        print(f"{prog}: error: {_os_message(err)}", file=sys.stderr)
+        return 2
+    except UnicodeDecodeError as err:
+        print(f"{prog}: error: a file is not UTF-8 text: byte 0x{err.object[err.start]:02x} "
+              f"at offset {err.start}; save it as UTF-8", file=sys.stderr)
         return 2
 
 

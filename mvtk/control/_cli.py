@@ -1,28 +1,40 @@
-"""``mvtk control STUDY.toml [--json]``: the controller comparison of a study."""
+"""``mvtk control STUDY.toml [--json]``: the controller comparison of a study.
+
+The study is read through the one schema of :mod:`mvtk.study`; the comparison is the
+``control`` stage of the cached study pipeline (the same table as the report's), with
+the stability verdict of every loop: closed-loop eigenvalues for the linear laws (the
+largest real part of the poles), the simulated trajectory for the nonlinear ones.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-import tempfile
 
 __all__ = ["add_parser", "plant_from_arrays"]
+
+_TEXT_COLUMNS = ("settling_time_s", "zeta_mode1", "fn_mode1_hz", "stable",
+                 "max_real_pole_1_per_s", "peak_voltage_V", "voltage_within_limit",
+                 "peak_reduction_db")
 
 
 def add_parser(subparsers) -> None:
     """Register the ``control`` sub-command."""
+    from .._run_cli import add_cache_argument
+
     p = subparsers.add_parser(
         "control",
         help="compare the controllers of a study's [control] section on its SE plant",
-        description="Build the study's super-element plant (stages up to reduction, cached "
-        "in --out) and run the [control] section: settling time, closed-loop damping of "
-        "mode 1, FFT peak reduction and actuator peak/RMS per controller.",
+        description="Run the study's stages up to its [control] section (cached) and print "
+        "per controller: settling time, closed-loop damping of mode 1, stability (largest "
+        "real part of the closed-loop poles), FFT peak reduction and actuator peak. Exit "
+        "status 1 when a closed loop is unstable.",
     )
     p.add_argument("study", help="study TOML file")
-    p.add_argument("--json", action="store_true", help="print the table as JSON")
-    p.add_argument("--out", default=None,
-                   help="folder for the stage cache (default: a temporary folder)")
+    p.add_argument("--json", action="store_true",
+                   help="print the table as JSON (schemas/control.schema.json)")
+    add_cache_argument(p)
+    p.add_argument("--out", dest="cache", default=None, help=argparse.SUPPRESS)
     p.set_defaults(func=_main)
 
 
@@ -39,22 +51,27 @@ def plant_from_arrays(pa):
 
 
 def _main(args: argparse.Namespace) -> int:
-    from ..errors import ConfigError
-    from ..study import run
-    from ._compare import run_control_section
+    import pandas as pd
 
-    with tempfile.TemporaryDirectory() as tmp:
-        res = run(args.study, args.out or tmp, report=False, progress=False)
-    if "reduction" not in res.arrays:
-        why = res.failed.get("reduction") or res.unavailable.get("reduction", "unknown")
-        raise ConfigError(f"{args.study}: no super-element plant ({why})")
-    section = res.study.config.get("control")
-    if section is None:
-        raise ConfigError(f"{args.study}: no [control] section")
-    result = run_control_section(plant_from_arrays(res.arrays["reduction"]), section)
+    from .._run_cli import json_document, run_view
+
+    res = run_view(args.study, ["control"], args.cache)
+    ctl = res.results["control"]
+    rows = ctl["metrics"]
+    unstable = [r["controller"] for r in rows if r.get("stable") is False]
     if args.json:
-        json.dump(result.to_dict(), sys.stdout, indent=2)
-        sys.stdout.write("\n")
+        body = {"rows": rows, "unstable": unstable,
+                **{k: ctl[k] for k in ("settle_band", "fs_out", "t_end_s",
+                                        "actuator_limit_v", "moment_per_volt")}}
+        sys.stdout.write(json_document("control", args.study, body) + "\n")
     else:
-        sys.stdout.write(result.to_dataframe().to_string() + "\n")
-    return 0
+        df = pd.DataFrame(rows).set_index("controller")
+        cols = [c for c in _TEXT_COLUMNS if c in df.columns]
+        with pd.option_context("display.width", 200, "display.max_columns", 20):
+            sys.stdout.write(df[cols].to_string() + "\n")
+        for name in unstable:
+            r = next(r for r in rows if r["controller"] == name)
+            print(f"mvtk control: closed loop {name!r} is UNSTABLE ({r['stability_basis']}; "
+                  f"largest real part of the poles {r['max_real_pole_1_per_s']:.4g} 1/s)",
+                  file=sys.stderr)
+    return 1 if unstable else 0

@@ -26,10 +26,12 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk modes``; returns the exit code (errors propagate as MvtkError)."""
+    from ..study._text import read_toml
     from ._modal import modal_analysis
     from ._structure import build_model
 
-    model = build_model(args.structure)
+    # UTF-8, UTF-8 with BOM or UTF-16 with BOM; a clear error naming the byte otherwise
+    model = build_model(read_toml(args.structure, "structure file"))
     res = modal_analysis(model, args.n_modes)
     if args.json:
         out = {

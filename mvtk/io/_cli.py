@@ -4,9 +4,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
-
-from ..errors import MvtkError
 
 __all__ = ["add_parser", "parse_option", "summary"]
 
@@ -45,17 +42,27 @@ def summary(ds) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
+    """Run ``mvtk read``: 0, or 2 with one line naming the file on any input error."""
+    import sys
+
+    from .._run_cli import check_output_file
+    from ..errors import MvtkError
     from . import read, write
 
-    options = dict(args.set or [])
     try:
+        if args.output:
+            check_output_file(args.output, "--output")  # before reading
+        options = dict(args.set or [])
         ds = read(args.path, format=args.format, **options)
         print(summary(ds))
         if args.output:
             write(ds, args.output)
             print(f"written: {args.output}")
-    except (MvtkError, FileNotFoundError) as err:
-        print(f"mvtk read: {err}", file=sys.stderr)
+    except (MvtkError, OSError) as err:
+        msg = " ".join(str(err).split("\n"))
+        if isinstance(err, OSError) and err.filename is not None and err.strerror:
+            msg = f"{err.filename}: {err.strerror}"
+        print(f"mvtk read: error: {msg}", file=sys.stderr)
         return 2
     return 0
 

@@ -10,7 +10,13 @@ Public API::
     super_element_from_config(model, reduction_table) -> (SuperElement, retained points)
 """
 
-from ._config import RetainedPoint, super_element_from_config
+from ._config import (
+    RetainedPoint,
+    local_element_size,
+    resolve_retained_config,
+    snap_point,
+    super_element_from_config,
+)
 from ._craig_bampton import ReducedModes, SuperElement, craig_bampton, guyan, reduced_modes
 from ._effective_mass import EffectiveMassTable, effective_mass
 from ._verify import (
@@ -32,6 +38,9 @@ __all__ = [
     "reduced_modes",
     "ReducedModes",
     "super_element_from_config",
+    "resolve_retained_config",
+    "snap_point",
+    "local_element_size",
     "RetainedPoint",
     "EffectiveMassTable",
     "effective_mass",

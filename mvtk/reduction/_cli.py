@@ -1,45 +1,46 @@
 """``mvtk reduce STUDY.toml [--json] [-n N]``: Craig-Bampton super element and its
 FE-vs-SE tables (sizes as the paper's Table 4, frequencies as its Table 5).
 
-The TOML either is a study file with ``[structure] file = "structure.toml"`` (path
-relative to the study file) or a structure description with the structure tables inline;
-either way it has a ``[reduction]`` section (see :mod:`mvtk.reduction._config`).
+The study is read through the one schema of :mod:`mvtk.study` and the super element is
+the ``reduction`` stage of the cached study pipeline: built from the updated model when
+the study has an ``[updating]`` section (as in ``mvtk run``), else from the nominal one.
+The structure is ``[structure] file = "structure.toml"`` or written inline.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
-import tomllib
 from pathlib import Path
 
 from ..errors import ConfigError
 
 __all__ = ["add_parser", "run", "load_reduction_input"]
 
-_STRUCTURE_KEYS = ("name", "materials", "structure", "patches", "mesh", "boundary", "points")
-
 
 def add_parser(subparsers) -> None:
     """Register the ``reduce`` sub-command."""
+    from .._run_cli import add_cache_argument
+
     p = subparsers.add_parser(
         "reduce",
         help="Craig-Bampton super element and FE-vs-SE tables of a study TOML",
-        description="Build the FE model of a study (or structure) TOML, reduce it to a "
-        "Craig-Bampton super element as its [reduction] section says, and print the "
-        "size table (nodes, elements, DOF), the FE vs SE eigenfrequencies with %% error "
-        "and MAC, and the static check of boundary loads.",
+        description="Build the FE model of a study (updated when it has [updating]), "
+        "reduce it to a Craig-Bampton super element as its [reduction] section says, and "
+        "print the size table (nodes, elements, DOF), the FE vs SE eigenfrequencies with "
+        "%% error and MAC, and the static check of boundary loads.",
     )
     p.add_argument("study", help="study TOML with [structure] and [reduction] sections")
     p.add_argument("-n", "--n-compare", type=int, default=None,
                    help="number of modes compared (default: reduction.n_compare or 4)")
-    p.add_argument("--json", action="store_true", help="print the tables as JSON")
+    p.add_argument("--json", action="store_true",
+                   help="print the tables as JSON (schemas/reduce.schema.json)")
+    add_cache_argument(p)
     p.set_defaults(func=run)
 
 
 def load_reduction_input(path: str | Path):
-    """Read a study/structure TOML: returns ``(model, reduction_table)``.
+    """Read a study TOML: returns ``(model, reduction_table)`` (nominal structure).
 
     Raises
     ------
@@ -47,71 +48,54 @@ def load_reduction_input(path: str | Path):
         Missing file, invalid TOML, no ``[reduction]`` or no structure.
     """
     from ..fe import build_model
+    from ..study import load_study
 
-    path = Path(path)
-    try:
-        with path.open("rb") as fh:
-            cfg = tomllib.load(fh)
-    except FileNotFoundError:
-        raise ConfigError(f"study file {str(path)!r} not found") from None
-    except tomllib.TOMLDecodeError as err:
-        raise ConfigError(f"{path}: invalid TOML: {err}") from err
-    if "reduction" not in cfg:
+    study = load_study(path)
+    if "reduction" not in study.config:
         raise ConfigError(f"{path}: no [reduction] section")
-    st = cfg.get("structure")
-    if isinstance(st, dict) and "file" in st:
-        rel = st["file"]
-        if not isinstance(rel, str):
-            raise ConfigError(f"{path}: structure.file: expected a path string, got {rel!r}")
-        spath = (path.parent / rel).resolve()
-        if not spath.is_file():
-            raise ConfigError(f"{path}: structure.file {rel!r} not found (looked for {spath})")
-        model = build_model(spath)
-    elif isinstance(st, dict):
-        model = build_model({k: cfg[k] for k in _STRUCTURE_KEYS if k in cfg})
-    else:
-        raise ConfigError(
-            f"{path}: expected a [structure] table with 'file' (study) or the structure "
-            "tables inline (structure TOML)"
-        )
-    return model, cfg["reduction"]
+    return build_model(study.description()), study.config["reduction"]
 
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk reduce``; returns the exit code (errors propagate as MvtkError)."""
-    from ._config import super_element_from_config
-    from ._verify import verify
+    import pandas as pd
 
-    model, red = load_reduction_input(args.study)
-    se, points = super_element_from_config(model, red)
-    n = args.n_compare if args.n_compare is not None else red.get("n_compare", 4)
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ConfigError(f"reduction.n_compare: expected an integer >= 1, got {n!r}")
-    n = min(n, se.n_dof)
-    ver = verify(model, se, n)
+    from .._run_cli import json_document, run_view
+
+    n = args.n_compare
+    if n is not None and n < 1:
+        raise ConfigError(f"--n-compare: expected an integer >= 1, got {n}")
+    res = run_view(args.study, ["reduction"], args.cache,
+                   {("reduction", "n_compare"): n} if n is not None else None)
+    red = res.results["reduction"]
+    ver = red["verify"]
     if args.json:
         out = {
-            "study": str(args.study),
-            "model": model.name,
-            "retained": [
-                {"name": p.name, "nodes": list(p.nodes), "free_dofs": p.n_free_dofs}
-                for p in points
-            ],
-            "n_boundary": se.n_boundary,
-            "n_modes": se.n_modes,
-            "interior_fn_hz": [float(f) for f in se.interior_fn_hz],
-            **ver.to_dict(),
+            "model": red["model"],
+            "retained": red["retained"],
+            "n_boundary": red["n_boundary"],
+            "n_modes": red["n_modes"],
+            "interior_fn_hz": red["interior_fn_hz"],
+            "updated_model": "updating" in res.results,
+            **ver,
         }
-        sys.stdout.write(json.dumps(out) + "\n")
+        sys.stdout.write(json_document("reduce", args.study, out) + "\n")
         return 0
-    title = model.name or str(args.study)
-    lines = [f"{title}: Craig-Bampton super element, {se.n_boundary} boundary DOF + "
-             f"{se.n_modes} fixed-interface modes", ""]
-    for p in points:
-        lines.append(f"  retained {p.name:<16} nodes {list(p.nodes)}  free DOF {p.n_free_dofs}")
-    lines += ["", ver.sizes.to_dataframe().to_string(), "",
-              ver.modes.to_dataframe().to_string(index=False, float_format="{:.6g}".format),
+    title = red["model"] or str(args.study)
+    lines = [f"{title}: Craig-Bampton super element, {red['n_boundary']} boundary DOF + "
+             f"{red['n_modes']} fixed-interface modes"
+             + (" (updated model)" if "updating" in res.results else ""), ""]
+    for p in red["retained"]:
+        snap = (f"  snapped {p['snap_distance_m']:.3g} m" if p["snap_distance_m"] > 0
+                else "")
+        lines.append(f"  retained {p['name']:<16} nodes {p['nodes']}  free DOF "
+                     f"{p['free_dofs']}{snap}")
+    sizes = pd.DataFrame(ver["sizes"]).set_index("quantity").rename(
+        columns={"fe": "FE model", "se": "SE model"})
+    lines += ["", sizes.to_string(), "",
+              pd.DataFrame(ver["modes"]).to_string(index=False,
+                                                   float_format="{:.6g}".format),
               "", f"static check (unit loads on boundary DOF): max relative error "
-              f"{ver.static.max_rel_error:.3e}"]
+              f"{ver['static_max_rel_error']:.3e}"]
     sys.stdout.write("\n".join(lines) + "\n")
     return 0

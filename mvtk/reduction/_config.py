@@ -29,30 +29,96 @@ from ..errors import ConfigError, MvtkError
 from ..fe import FEModel
 from ._craig_bampton import SuperElement, craig_bampton
 
-__all__ = ["RetainedPoint", "resolve_retained_config", "super_element_from_config"]
+__all__ = ["RetainedPoint", "resolve_retained_config", "super_element_from_config",
+           "snap_point", "local_element_size"]
 
-_KEYS = {"n_modes", "mass_fraction", "f_cut_hz", "direction", "n_compare", "retained"}
+_KEYS = {"n_modes", "mass_fraction", "f_cut_hz", "direction", "n_compare", "retained",
+         "plant_modes"}
 
 
 @dataclass(frozen=True)
 class RetainedPoint:
-    """One retained item of the configuration, resolved to model nodes."""
+    """One retained item of the configuration, resolved to model nodes.
+
+    Attributes
+    ----------
+    name : str
+    nodes : tuple of int
+    n_free_dofs : int
+    snap_distance_m : float
+        Distance (m) from a configured point ``xyz`` to the node retained for it (0 for
+        node sets and node indices).
+    """
 
     name: str
     nodes: tuple[int, ...]
     n_free_dofs: int
+    snap_distance_m: float = 0.0
+
+
+def local_element_size(model: FEModel, node: int) -> float:
+    """Longest edge (m) of the elements around ``node`` (the local mesh size).
+
+    Falls back to the distance to the nearest other node when the model lists no
+    element connectivity.
+    """
+    edges = []
+    for conn in model.elements.values():
+        conn = np.asarray(conn)
+        if conn.ndim != 2 or conn.size == 0:
+            continue
+        rows = conn[np.any(conn == node, axis=1)]
+        if rows.size == 0:
+            continue
+        a, b = rows, np.roll(rows, -1, axis=1)
+        edges.append(np.linalg.norm(model.nodes[a] - model.nodes[b], axis=-1).ravel())
+    if edges:
+        return float(np.max(np.concatenate(edges)))
+    d = np.linalg.norm(model.nodes - model.nodes[node], axis=1)
+    d = d[d > 0]
+    return float(d.min()) if d.size else 0.0
+
+
+def snap_point(model: FEModel, xyz, where: str, tolerance: float | None = None):
+    """The node retained for a point: ``(node, distance_m)``.
+
+    The nearest node is taken when it lies within ``tolerance`` of the point (default:
+    the local element size, :func:`local_element_size`; a point on the meshed structure
+    is never farther than that from a node).
+
+    Raises
+    ------
+    ConfigError
+        The point is farther than the tolerance from every node (off the structure).
+    """
+    p = np.asarray(xyz, dtype=float)
+    node = model.nearest_node(p)
+    dist = float(np.linalg.norm(model.nodes[node] - p))
+    tol = local_element_size(model, node) if tolerance is None else float(tolerance)
+    if not np.isfinite(dist) or dist > tol * (1 + 1e-9):
+        lo, hi = model.nodes.min(axis=0), model.nodes.max(axis=0)
+        raise ConfigError(
+            f"{where}: point {p.tolist()} m is {dist:.4g} m from the nearest node "
+            f"n{node} at {model.nodes[node].tolist()}, beyond the snap tolerance "
+            f"{tol:.4g} m (the local element size): the point is off the structure "
+            f"(its nodes span {lo.tolist()} to {hi.tolist()} m)"
+        )
+    return node, dist
 
 
 def resolve_retained_config(model: FEModel, retained, where: str = "reduction.retained"):
     """Resolve ``retained`` config items to :class:`RetainedPoint` s.
 
     Items are node set names (str), points ``[x, y, z]`` (m), or tables with ``name``
-    and one of ``xyz`` / ``node_set`` / ``node``.
+    and one of ``xyz`` / ``node_set`` / ``node``. A point is snapped to its nearest node
+    (the distance is kept in ``snap_distance_m``) and refused beyond the local element
+    size (:func:`snap_point`).
 
     Raises
     ------
     ConfigError
-        Naming the item (``reduction.retained[i]``) and what was expected.
+        Naming the item (``reduction.retained[i]``) and what was expected; a point off
+        the structure; two items that resolve to the same node.
     """
     if isinstance(retained, str) or not isinstance(retained, list | tuple) or not retained:
         raise ConfigError(
@@ -60,9 +126,11 @@ def resolve_retained_config(model: FEModel, retained, where: str = "reduction.re
             f"tables with name and xyz/node_set/node, got {retained!r}"
         )
     out = []
+    owner: dict[int, str] = {}
     for i, item in enumerate(retained):
         w = f"{where}[{i}]"
         name = None
+        snap = 0.0
         if isinstance(item, Mapping):
             unknown = set(item) - {"name", "xyz", "node_set", "node"}
             given = [k for k in ("xyz", "node_set", "node") if k in item]
@@ -95,16 +163,25 @@ def resolve_retained_config(model: FEModel, retained, where: str = "reduction.re
                     raise ConfigError(
                         f"{w}: expected a point [x, y, z] in m, got {spec!r}"
                     )
-                nodes = np.array([model.nearest_node(arr.astype(float))])
+                node, snap = snap_point(model, arr.astype(float), w)
+                nodes = np.array([node])
         except ConfigError:
             raise
         except MvtkError as err:
             raise ConfigError(f"{w}: {err}") from err
-        nodes = tuple(int(n) for n in nodes)
+        nodes = tuple(dict.fromkeys(int(n) for n in nodes))
         label = str(name) if name is not None else (
             str(spec) if kind == "node_set" else f"n{nodes[0]}"
         )
-        out.append(RetainedPoint(label, nodes, int(model.node_dofs(list(nodes)).size)))
+        for n in nodes:
+            if n in owner:
+                raise ConfigError(
+                    f"{w} ({label!r}) and {owner[n]} resolve to the same node n{n} at "
+                    f"{model.nodes[n].tolist()} m: retained items would merge; move the "
+                    "points apart by more than the element size or refine the mesh"
+                )
+            owner[n] = f"{w} ({label!r})"
+        out.append(RetainedPoint(label, nodes, int(model.node_dofs(list(nodes)).size), snap))
     return out
 
 
@@ -134,15 +211,16 @@ def super_element_from_config(
     points = resolve_retained_config(model, cfg["retained"], f"{where}.retained")
     kwargs = {}
     for key, typ in (("n_modes", int), ("mass_fraction", float), ("f_cut_hz", float)):
-        if key in cfg:
+        if cfg.get(key) is not None:
             v = cfg[key]
             ok = isinstance(v, int) if typ is int else isinstance(v, int | float)
             if isinstance(v, bool) or not ok:
                 raise ConfigError(f"{where}.{key}: expected a number, got {v!r}")
             kwargs[key] = typ(v)
-    if "direction" in cfg:
+    if cfg.get("direction") is not None:
         kwargs["direction"] = str(cfg["direction"])
-    nodes = sorted({n for p in points for n in p.nodes})
+    # the configured order (no node is retained twice, resolve_retained_config refuses it)
+    nodes = [n for p in points for n in p.nodes]
     try:
         se = craig_bampton(model, nodes, **kwargs)
     except MvtkError as err:

@@ -114,9 +114,28 @@ def study_checks(res: StudyResult) -> list[Check]:
                 checks.append(Check(f"{name} peak voltage within the PIC 151 limit",
                                     row["peak_voltage_V"], ctl["actuator_limit_v"], 0.0, "V",
                                     kind="upper", source="study control.actuator_limit_v"))
+            stable = row.get("stable")
+            if stable is not None:
+                if row.get("stability_basis", "").startswith("closed-loop eigenvalues"):
+                    checks.append(Check(
+                        f"{name} closed loop stable (largest real part of the poles)",
+                        row["max_real_pole_1_per_s"] if stable
+                        else max(row["max_real_pole_1_per_s"], 1e-300),
+                        0.0, 0.0, "1/s", kind="upper", source="closed-loop eigenvalues"))
+                else:
+                    checks.append(Check(f"{name} closed loop stable (trajectory decays)",
+                                        1.0 if stable else 0.0, 1.0, 0.0, "", kind="lower",
+                                        source="simulated trajectory"))
             z = row["zeta_mode1"]
             if z is not None and not (isinstance(z, float) and math.isnan(z)):
-                checks.append(Check(f"{name} closed-loop zeta of mode 1", z,
+                if stable is False:
+                    # an unstable loop adds no damping, whatever the mode-1 pole does
+                    z = row.get("zeta_min", -1.0)
+                    if z is None or (isinstance(z, float) and math.isnan(z)):
+                        z = -1.0
+                checks.append(Check(f"{name} closed-loop zeta of mode 1"
+                                    + ("" if stable is not False
+                                       else " (loop UNSTABLE: least-damped pole)"), z,
                                     tol["closed_loop_zeta_min"], 0.0, "", kind="lower",
                                     source="study tolerance"))
     return checks
@@ -290,11 +309,18 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
     cols = {}
     up = res.results.get("updating")
     targets = (up or {}).get("targets_hz") or _ref(res, "experiment_fn_hz")
+    updated = list(up["fn_hz"]) if up else None
     if targets:
+        # rows in mode order whatever the order the targets were listed in (the updated
+        # frequency of each target follows it)
+        order = np.argsort(np.asarray(targets, dtype=float), kind="stable")
+        targets = [targets[i] for i in order]
+        if updated is not None and len(updated) == len(order):
+            updated = [updated[i] for i in order]
         cols["experiment"] = targets
     cols["FE nominal"] = fe["fn_hz"][: len(targets) if targets else None]
     if up:
-        cols["FE updated"] = up["fn_hz"]
+        cols["FE updated"] = updated
     if _ref(res, "fe_fn_hz"):
         cols["paper FE"] = _ref(res, "fe_fn_hz")
     if targets:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 import traceback
@@ -10,11 +11,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError
-from ._cache import StageCache, code_hash, stage_key
+from ..errors import ConfigError, MvtkError
+from ._cache import OutputLock, ReadTracker, StageCache, TrackedStudy, code_hash, stage_key
 from ._config import Study, load_study
 
-__all__ = ["StudyResult", "run", "STAGES"]
+__all__ = ["StudyResult", "run", "STAGES", "STAGE_NEEDS", "check_output_dir"]
 
 #: Subpackages whose source is part of each stage's cache key.
 _CODE = {
@@ -30,6 +31,55 @@ _CODE = {
 #: Stage names in execution order.
 STAGES = ("ingest", "fe", "updating", "uncertainty", "damping", "reduction", "control",
           "report")
+
+#: Upstream stages whose results each stage consumes (when they are configured).
+STAGE_NEEDS = {
+    "ingest": (),
+    "fe": (),
+    "updating": (),
+    "uncertainty": ("fe", "updating"),
+    "damping": ("ingest", "fe", "updating"),
+    "reduction": ("fe", "updating", "damping"),
+    "control": ("fe", "updating", "reduction"),
+}
+#: The section that configures each stage (None: always configured).
+_SECTION = {"ingest": "measurements", "fe": None, "updating": "updating",
+            "uncertainty": "uncertainty", "damping": "damping", "reduction": "reduction",
+            "control": "control"}
+#: Stages that must complete for a stage to run even when their section is absent.
+_HARD = {"uncertainty": ("fe",), "damping": ("ingest", "fe"), "reduction": ("fe",),
+         "control": ("fe", "reduction")}
+
+
+def check_output_dir(out: str | Path) -> Path:
+    """Create ``out`` if needed and prove it is a writable folder, before any work starts.
+
+    Raises
+    ------
+    ConfigError
+        ``out`` or its ``cache`` entry is a file, or the folder cannot be created or
+        written; the message names the path.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise ConfigError(f"--out {str(out)!r} is a file, expected a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ConfigError(f"cannot create the output folder {str(out)!r}: "
+                          f"{err.strerror or err}") from None
+    cache = out / "cache"
+    if cache.exists() and not cache.is_dir():
+        raise ConfigError(f"{str(cache)!r} is a file; the stage cache needs this name for a "
+                          "folder: remove or rename it, or use another --out")
+    probe = out / f".mvtk-write-test-{os.getpid()}"
+    try:
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as err:
+        raise ConfigError(f"the output folder {str(out)!r} is not writable: "
+                          f"{err.strerror or err}") from None
+    return out
 
 
 @dataclass(frozen=True)
@@ -98,29 +148,65 @@ def _file_hashes(study: Study) -> dict[str, str]:
     return {str(p.name): file_sha256(p) for p in study.input_files}
 
 
+def _configured(cfg: dict, stage: str) -> bool:
+    sec = _SECTION[stage]
+    return sec is None or bool(cfg.get(sec))
+
+
+def stages_for(cfg: dict, wanted) -> list[str]:
+    """``wanted`` stages plus every configured upstream stage they need, in run order."""
+    todo: set[str] = set()
+
+    def add(s: str) -> None:
+        if s in todo:
+            return
+        todo.add(s)
+        for n in STAGE_NEEDS[s]:
+            if _configured(cfg, n) or n in _HARD.get(s, ()):
+                add(n)
+
+    for s in wanted:
+        if s not in STAGE_NEEDS:
+            raise ConfigError(f"unknown stage {s!r}; expected some of {list(STAGE_NEEDS)}")
+        add(s)
+    return [s for s in STAGES if s in todo]
+
+
 def run(
-    study_path: str | Path,
+    study_path: str | Path | Study,
     out_dir: str | Path,
     *,
     use_cache: bool = True,
     progress: bool | None = None,
     report: bool = True,
+    stages=None,
+    lock_timeout_s: float | None = None,
+    on_wait: Callable[[str], None] | None = None,
 ) -> StudyResult:
     """Run the study in ``study_path`` and write its report to ``out_dir``.
 
     Parameters
     ----------
-    study_path : path
-        Study TOML (schema in :mod:`mvtk.study._config`).
+    study_path : path or Study
+        Study TOML (schema: :data:`mvtk.study.SCHEMA`), or a loaded study.
     out_dir : path
         Output folder: ``index.html``, ``tables/*.csv``, ``cache/`` (stage results keyed
-        by a hash of their inputs; a stage whose inputs did not change is loaded).
+        by what each stage read; a stage whose inputs did not change is loaded). Checked
+        (created, writable, no file named ``cache``) before any stage runs, and locked
+        for the run: a concurrent run into the same folder waits.
     use_cache : bool
         Set False to recompute every stage.
     progress : bool, optional
         Show a tqdm progress bar; default only when stderr is a terminal.
     report : bool
-        Write the HTML report.
+        Write the HTML report (only when every stage is run).
+    stages : sequence of str, optional
+        Run only these stages and the configured upstream stages they need (the views of
+        ``mvtk update``, ``reduce``, ``control``); default all.
+    lock_timeout_s : float, optional
+        Wait at most this long for another run holding ``out_dir`` (default: no limit).
+    on_wait : callable, optional
+        Called with a message if the run has to wait for the lock.
 
     Returns
     -------
@@ -129,111 +215,109 @@ def run(
     Raises
     ------
     ConfigError
-        Invalid study file (raised before any stage runs).
+        Invalid study file or output folder (raised before any stage runs).
+    OutputBusyError
+        ``lock_timeout_s`` elapsed while another run held the folder.
     """
+    study = study_path if isinstance(study_path, Study) else load_study(study_path)
+    out = check_output_dir(out_dir)
+    with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait):
+        return _run_locked(study, out, use_cache=use_cache, progress=progress,
+                           report=report, stages=stages)
+
+
+def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages):
     import mvtk
 
-    study = load_study(study_path)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     cache = StageCache(out / "cache", enabled=use_cache)
+    cache.clean_temporaries()
     hashes = _file_hashes(study)
     version = mvtk.__version__
     results: dict[str, dict] = {}
     arrays: dict[str, Any] = {}
-    keys: dict[str, str] = {}
     unavailable: dict[str, str] = {}
     failed: dict[str, str] = {}
     timings: dict[str, float] = {}
     cfg = study.config
+    selected = stages_for(cfg, STAGE_NEEDS if stages is None else stages)
+    report = report and stages is None
 
     from tqdm.auto import tqdm
 
     show = sys.stderr.isatty() if progress is None else progress
-    bar = tqdm(total=len(STAGES), desc="mvtk run", unit="stage", disable=not show,
-               leave=False)
+    bar = tqdm(total=len(selected) + int(report), desc="mvtk run", unit="stage",
+               disable=not show, leave=False)
 
-    def do(name: str, needs: tuple[str, ...], configured: bool, key_parts: list,
-           compute: Callable[[], tuple[dict, Any]]) -> None:
+    def do(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
+        if name not in selected:
+            return
         bar.set_postfix_str(name)
         t0 = time.perf_counter()
         try:
-            if not configured:
+            if not _configured(cfg, name):
                 unavailable[name] = "not configured in the study file"
                 return
+            needs = [n for n in STAGE_NEEDS[name]
+                     if _configured(cfg, n) or n in _HARD.get(name, ())]
             missing = [n for n in needs if n not in results]
             if missing:
                 unavailable[name] = f"needs the stage(s) {missing}, which did not complete"
                 return
-            key = stage_key(name, version, code_hash(*_CODE[name]), key_parts,
-                            [keys[n] for n in needs])
+            key = stage_key(name, version, code_hash(*_CODE[name]),
+                            {n: cache.keys[n] for n in needs})
+            tracker = ReadTracker(study)
             try:
-                res, ds = cache.get(name, key, compute)
+                res, ds = cache.get(name, key, lambda: compute(TrackedStudy(study, tracker)),
+                                    tracker)
+            except MvtkError as err:
+                failed[name] = str(err)
+                return
             except ImportError as err:
                 unavailable[name] = f"the API this stage needs is not available ({err})"
                 return
-            except ConfigError:
+            except (KeyboardInterrupt, SystemExit):
                 raise
             except Exception as err:  # noqa: BLE001 - recorded, shown in the report
                 tb = traceback.extract_tb(err.__traceback__)[-1]
-                failed[name] = (f"{type(err).__name__}: {err} "
-                                f"(at {Path(tb.filename).name}:{tb.lineno})")
+                failed[name] = (f"internal error {type(err).__name__}: {err} "
+                                f"(at {Path(tb.filename).name}:{tb.lineno}); please report it")
                 return
-            keys[name] = key
             results[name] = res
             if ds is not None:
                 arrays[name] = ds
         finally:
             timings[name] = time.perf_counter() - t0
-            bar.update(1)
+            if name in selected:
+                bar.update(1)
 
     from . import _stages as st
 
-    meas = cfg.get("measurements", {})
-    meas_hashes = {p.name: hashes[p.name] for p in study.measurement_files.values()}
-    # keyed by file content, not by the path spelling in the study file
-    meas_key = {k: {kk: vv for kk, vv in v.items() if kk != "file"} for k, v in meas.items()}
-    do("ingest", (), bool(meas), [meas_hashes, meas_key], lambda: st.ingest(study))
-    do("fe", (), True, [hashes[study.structure_file.name], cfg.get("fe", {})],
-       lambda: st.fe_nominal(study))
-    do("updating", ("fe",), "updating" in cfg, [cfg.get("updating", {})],
-       lambda: st.updating(study))
+    do("ingest", st.ingest)
+    do("fe", st.fe_nominal)
+    do("updating", st.updating)
 
-    def _description() -> dict:
+    def _description(s: TrackedStudy) -> dict:
         """The updated structure when updating ran, else the nominal one."""
-        from ..fe import load_structure
+        if "updating" in results:
+            return results["updating"]["description"]
+        return s.description()
 
-        return (results["updating"]["description"] if "updating" in results
-                else load_structure(study.structure_file))
-
-    # Monte Carlo on the updated structure; no later stage depends on it (its key is in
-    # no other stage's key, so changing [uncertainty] reruns only this stage)
-    unc_needs = ("fe",) + (("updating",) if "updating" in cfg else ())
-    do("uncertainty", unc_needs, "uncertainty" in cfg, [cfg.get("uncertainty", {})],
-       lambda: st.uncertainty(study, _description()))
-
+    # Monte Carlo on the updated structure; no later stage depends on it
+    do("uncertainty", lambda s: st.uncertainty(s, _description(s)))
     # damping pairs identified modes with the (updated) FE model's effective masses
-    dmp_needs = ("ingest", "fe") + (("updating",) if "updating" in cfg else ())
-    do("damping", dmp_needs, "damping" in cfg, [cfg.get("damping", {})],
-       lambda: st.damping(study, arrays["ingest"], _description()))
+    do("damping", lambda s: st.damping(s, arrays["ingest"], _description(s)))
     # the SE is built from the updated model when updating ran, else from the nominal one
-    def _reduction():
-        md = results.get("damping", {}).get("model_damping")
-        return st.reduction(study, _description(), md)
+    do("reduction", lambda s: st.reduction(
+        s, _description(s), results.get("damping", {}).get("model_damping")))
 
-    red_needs = ("fe",) + (("updating",) if "updating" in cfg else ()) + (
-        ("damping",) if "damping" in cfg else ())
-    do("reduction", red_needs, "reduction" in cfg,
-       [cfg.get("reduction", {}), cfg.get("control", {}).get("actuator_nodes"),
-        cfg.get("control", {}).get("sensor_node")], _reduction)
-
-    def _control():
+    def _control(s: TrackedStudy):
         if "reduction" not in arrays:
-            raise ConfigError("control needs the SE plant; [control] and [damping] must be set")
+            raise ConfigError("control needs the SE plant: the [control] section needs "
+                              "[damping] (the Rayleigh pair of the plant) and [reduction]")
         fn1 = results.get("updating", {}).get("fn_hz", [None])[0] or results["fe"]["fn_hz"][0]
-        return st.control(study, arrays["reduction"], float(fn1))
+        return st.control(s, arrays["reduction"], float(fn1))
 
-    do("control", ("reduction",), "control" in cfg, [cfg.get("control", {})], _control)
+    do("control", _control)
 
     report_path = None
     t0 = time.perf_counter()
@@ -246,7 +330,8 @@ def run(
                               timings_s=dict(timings))
         report_path = build_report(partial, hashes)
     timings["report"] = time.perf_counter() - t0
-    bar.update(1)
+    if report:
+        bar.update(1)
     bar.close()
     return StudyResult(study=study, out_dir=out, report_path=report_path, results=results,
                        arrays=arrays, unavailable=unavailable, failed=failed,

@@ -91,7 +91,7 @@ def fe_nominal(study: Study):
     from ..reduction import effective_mass
 
     n_modes = int((study.section("fe") or {}).get("n_modes", 6))
-    model = build_model(study.structure_file)
+    model = build_model(study.description())
     modes = modal_analysis(model, n_modes)
     em = effective_mass(model, "uz", n_modes=n_modes)
     result = {
@@ -267,36 +267,46 @@ def damping(study: Study, arrays, description: dict):
 
 # --------------------------------------------------------------------------- updating
 def updating(study: Study):
-    """Sensitivity-based update of the configured parameters to the target frequencies."""
-    from ..fe import load_structure
+    """Sensitivity-based update of the configured parameters to the target frequencies.
+
+    Reads ``[updating]``: ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables,
+    ``parameters`` (a field absent from the structure is created with ``initial``) and
+    the solver settings (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``,
+    ``frequency_std``, ``builder``).
+    """
     from ..updating import FrequencyTarget, Parameter, update
+    from ..updating._cli import _builder, _create_missing
 
     cfg = study.section("updating")
-    desc = load_structure(study.structure_file)
+    desc = study.description()
     params = []
-    for p in cfg["parameters"]:
-        path = p["path"]
-        if "initial" in p:
+    for i, p in enumerate(cfg["parameters"]):
+        where = f"updating.parameters[{i}]"
+        if p.get("initial") is not None:
             # a field absent from the nominal description (e.g. an elastic clamp) starts
             # at the configured value
-            head, _, leaf = path.rpartition(".")
-            node = desc
-            for part in head.split(".") if head else []:
-                node = node.setdefault(part, {})
-            node.setdefault(leaf, float(p["initial"]))
-        params.append(Parameter(path, initial=p.get("initial"), lower=p.get("lower"),
-                                upper=p.get("upper")))
-    targets = [FrequencyTarget(float(f), label=f"f{i + 1}")
-               for i, f in enumerate(cfg["targets_hz"])]
+            _create_missing(desc, p["path"], p["initial"], where)
+        params.append(Parameter.from_dict({k: v for k, v in p.items() if v is not None},
+                                          where))
+    if cfg.get("targets_hz") is not None:
+        targets = [FrequencyTarget(float(f), label=f"f{i + 1}")
+                   for i, f in enumerate(cfg["targets_hz"])]
+    else:
+        targets = [FrequencyTarget.from_dict(dict(t), f"updating.targets[{i}]")
+                   for i, t in enumerate(cfg["targets"])]
+    kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
+              if cfg.get(k) is not None}
+    if cfg.get("builder") is not None:
+        kwargs["builder"] = _builder(cfg["builder"])
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = update(desc, params, targets, max_iter=int(cfg.get("max_iter", 30)))
+        res = update(desc, params, targets, max_iter=int(cfg.get("max_iter", 30)), **kwargs)
     result = {
         "success": bool(res.success), "message": str(res.message),
         "parameters": [p.path for p in params],
         "initial_values": res.initial_values, "values": res.values, "std": res.std,
         "at_bound": res.at_bound,
-        "targets_hz": [float(f) for f in cfg["targets_hz"]],
+        "targets_hz": [float(t.fn_hz) for t in targets],
         "fn_hz_initial": res.fn_hz_initial, "fn_hz": res.fn_hz,
         "modes": res.modes, "model_fn_hz": res.model_fn_hz,
         "model_kinds": list(res.model_kinds),
@@ -304,6 +314,7 @@ def updating(study: Study):
         "n_evaluations": res.n_evaluations,
         "description": res.description,
         "warnings": _warning_messages(caught),
+        "summary": res.to_dict(),
     }
     return result, None
 
@@ -493,19 +504,23 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
 
     from ..control._plant import dof_load, structural_plant
     from ..fe import PiezoPatch, build_model, edge_moment_load, modal_analysis, static_solve
-    from ..reduction import craig_bampton, verify
+    from ..reduction import verify
+    from ..reduction._config import super_element_from_config
 
     cfg = study.section("reduction")
     ctl = study.section("control") or {}
     model = build_model(description)
-    named = {str(r["name"]): model.nearest_node(r["xyz"]) for r in cfg["retained"]}
-    se = craig_bampton(model, retained=list(named.values()), n_modes=int(cfg.get("n_modes",
-                                                                              10)))
-    n_cmp = int(cfg.get("n_compare", 4))
+    se, points = super_element_from_config(model, cfg)
+    named = {p.name: p.nodes[0] for p in points}
+    n_cmp = min(int(cfg.get("n_compare", 4)), se.n_dof)
     ver = verify(model, se, n=n_cmp)
     result = {
         "retained_nodes": named,
         "retained_xyz": {k: model.nodes[v].tolist() for k, v in named.items()},
+        "retained": [{"name": p.name, "nodes": list(p.nodes), "free_dofs": p.n_free_dofs,
+                      "snap_distance_m": p.snap_distance_m} for p in points],
+        "model": model.name, "n_boundary": int(se.n_boundary), "n_modes": int(se.n_modes),
+        "verify": ver.to_dict(),
         "sizes": ver.sizes.to_dataframe().rename_axis("quantity").reset_index()
         .to_dict(orient="list")
         if hasattr(ver.sizes, "to_dataframe") else {},
@@ -518,6 +533,12 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
     ds = None
     if ctl and model_damping is not None:
         act = patch_actuator(description, ctl.get("patch"))
+        single = {p.name: p for p in points}
+        for key in ("actuator_nodes", "sensor_node"):
+            for n in (ctl[key] if key == "actuator_nodes" else [ctl[key]]):
+                if len(single[n].nodes) != 1:
+                    raise ConfigError(f"control.{key}: retained item {n!r} has "
+                                      f"{len(single[n].nodes)} nodes; expected one node")
         x0, x1 = (named[n] for n in ctl["actuator_nodes"])
         tip = named[ctl["sensor_node"]]
         # pin-force moment pair per volt on ry of the two retained edge nodes (single-node
@@ -598,6 +619,10 @@ def control(study: Study, plant_arrays, fn1_hz: float):
     )
     x0 = release_state(plant, 1, "tip", float(cfg["initial_tip_displacement_m"]))
     t_end, fs = float(cfg["t_end_s"]), float(cfg["fs_out"])
+    if fs <= 2.4 * fn1_hz:
+        raise ConfigError(f"control.fs_out = {fs:g} Hz cannot resolve the first mode "
+                          f"({fn1_hz:.4g} Hz) in the spectra: expected fs_out > 2.4 x "
+                          f"{fn1_hz:.4g} = {2.4 * fn1_hz:.4g} Hz")
     band = float(cfg["settle_band"])
     limit_v = float(cfg.get("actuator_limit_v", 100.0))
     m_per_v = abs(float(pa.attrs.get("moment_per_volt", float("nan"))))
@@ -638,6 +663,7 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         t = sim["time"].values
         series[name], inputs[name] = y, u
         zeta_cl = fn_cl = float("nan")
+        stab = _stability(plant, ctrl, y, amp0)
         if ctrl is None:
             om = closed_loop_modes(plant)
             osc = om.eigenvalues.imag > 0
@@ -649,7 +675,7 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         f, a = _amplitude_spectrum(y, fs)
         rows.append({"controller": name,
                      "settling_time_s": settling_time(y, t, band=band, reference=amp0),
-                     "zeta_mode1": zeta_cl, "fn_mode1_hz": fn_cl,
+                     "zeta_mode1": zeta_cl, "fn_mode1_hz": fn_cl, **stab,
                      "peak_tip_m_after_1s": float(np.max(np.abs(y[t >= 1.0]))),
                      "peak_voltage_V": float(np.max(np.abs(u))),
                      "peak_moment_Nm": float(np.max(np.abs(u))) * m_per_v,
@@ -671,6 +697,38 @@ def control(study: Study, plant_arrays, fn1_hz: float):
             "methods": methods, "control_rate_hz": rates,
             "switching_peak": switching_peak,
             "controllers": {k: repr(v) for k, v in runs.items()}}, ds
+
+
+def _stability(plant, ctrl, y: np.ndarray, amp0: float) -> dict:
+    """Stability verdict of one loop.
+
+    Linear laws (also the small-signal loop of a saturated linear law): the eigenvalues
+    of the closed-loop state matrix (:func:`mvtk.control.closed_loop`); the loop is
+    stable when every pole has a real part below ``-1e-9 max|p|`` (a pole on the
+    imaginary axis is marginal, i.e. not stable). Nonlinear laws: along the simulated
+    trajectory, finite and with the peak of the last fifth of the record below the
+    release amplitude.
+    """
+    from ..control import closed_loop, closed_loop_modes
+
+    if ctrl is None or kind_linear(ctrl):
+        if ctrl is None:
+            poles = closed_loop_modes(plant).eigenvalues
+        else:
+            poles = closed_loop(plant, dataclasses.replace(ctrl, u_max=None)).poles()
+        poles = np.asarray(poles, dtype=complex)
+        k = int(np.argmax(poles.real))
+        p = poles[k]
+        margin = 1e-9 * float(np.max(np.abs(poles)))
+        zeta_min = float(-p.real / abs(p)) if abs(p) > 0 else 0.0
+        return {"stable": bool(p.real < -margin), "max_real_pole_1_per_s": float(p.real),
+                "critical_pole_imag_rad_s": float(abs(p.imag)), "zeta_min": zeta_min,
+                "stability_basis": "closed-loop eigenvalues"}
+    tail = y[int(0.8 * len(y)):]
+    ok = bool(np.all(np.isfinite(y)) and tail.size and np.max(np.abs(tail)) < abs(amp0))
+    return {"stable": ok, "max_real_pole_1_per_s": float("nan"),
+            "critical_pole_imag_rad_s": float("nan"), "zeta_min": float("nan"),
+            "stability_basis": "simulated trajectory (decays below the release amplitude)"}
 
 
 def kind_linear(ctrl) -> bool:

@@ -65,6 +65,10 @@ def study_file(tmp_path_factory) -> Path:
 def test_reduce_json_paper_shape(study_file, capsys):
     assert main(["reduce", str(study_file), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "schemas" / "reduce.schema.json").read_text())
+    jsonschema.validate(out, schema, cls=jsonschema.Draft202012Validator)
+    assert out["schema_version"] == "mvtk.reduce/1" and not out["updated_model"]
     sizes = {row["quantity"]: row for row in out["sizes"]}
     # 5 retained nodes (the clamp node has no free DOF), 10 modes: the paper's 40 DOF
     assert sizes["Number of nodes"]["se"] == 5
@@ -124,8 +128,9 @@ def test_config_errors(cfg, message):
 def test_cli_file_errors(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text("[reduction\n")
+    (tmp_path / "beam.toml").write_text(coarse_structure_text())
     no_red = tmp_path / "nored.toml"
-    no_red.write_text('[structure]\nfile = "x.toml"\n')
+    no_red.write_text('[structure]\nfile = "beam.toml"\n')
     missing_struct = tmp_path / "ms.toml"
     missing_struct.write_text('[structure]\nfile = "x.toml"\n' + REDUCTION)
     no_struct = tmp_path / "ns.toml"
@@ -134,12 +139,14 @@ def test_cli_file_errors(tmp_path, capsys):
         (tmp_path / "missing.toml", "not found"),
         (bad, "invalid TOML"),
         (no_red, r"no \[reduction\] section"),
-        (missing_struct, "structure.file 'x.toml' not found"),
-        (no_struct, r"expected a \[structure\] table"),
+        (missing_struct, "structure.file: 'x.toml' not found"),
+        (no_struct, r"missing \[structure\] section"),
+        (tmp_path, "is a directory, expected a TOML file"),
     ]
     for path, message in cases:
         with pytest.raises(ConfigError, match=message):
             load_reduction_input(path)
-    # through the command: MvtkError -> exit code 2 and the message on stderr
-    assert main(["reduce", str(bad)]) == 2
-    assert "invalid TOML" in capsys.readouterr().err
+        # through the command: MvtkError -> exit code 2 and one line on stderr
+        assert main(["reduce", str(path)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("mvtk reduce: error:") and err.count("\n") == 1, err

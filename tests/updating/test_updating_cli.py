@@ -13,7 +13,7 @@ import tomli_w
 from updating_helpers import NOMINAL, model_fn
 
 from mvtk.cli import main
-from mvtk.errors import ConfigError, FormatError
+from mvtk.errors import ConfigError
 from mvtk.updating import FrequencyTarget, Parameter, update, with_values
 from mvtk.updating._cli import load_study
 
@@ -50,6 +50,9 @@ def test_cli_inline_structure_json_and_out(tmp_path, capsys):
     code = main(["update", str(path), "--json", "--out", str(out)])
     assert code == 0
     res = json.loads(capsys.readouterr().out)
+    jsonschema = pytest.importorskip("jsonschema")
+    schema = json.loads((ROOT / "schemas" / "update.schema.json").read_text())
+    jsonschema.validate(res, schema, cls=jsonschema.Draft202012Validator)
     assert res["success"] and res["identifiable"]
     assert res["updated_values"]["materials.steel.E"] == pytest.approx(2.1e11, rel=5e-3)
     assert max(abs(r["error_pct"]) for r in res["residuals"]) < 1e-3
@@ -62,7 +65,8 @@ def test_cli_inline_structure_json_and_out(tmp_path, capsys):
 def test_cli_structure_file_and_text_tables(tmp_path, capsys):
     (tmp_path / "structures").mkdir()
     (tmp_path / "structures" / "strip.toml").write_text(tomli_w.dumps(_start()))
-    study = {"updating": _updating_table(structure_file="structures/strip.toml", max_iter=30)}
+    study = {"structure": {"file": "structures/strip.toml"},
+             "updating": _updating_table(max_iter=30)}
     path = tmp_path / "study.toml"
     path.write_text(tomli_w.dumps(study))
     kw = load_study(path)
@@ -72,14 +76,6 @@ def test_cli_structure_file_and_text_tables(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "Residuals" in text and "Unpaired model modes" in text
     assert "boundary.clamp_stiffness" in text
-
-
-def test_cli_structure_key(tmp_path):
-    study = {"model": _start(), "damping": {"method": "half_power"},
-             "updating": _updating_table(structure_key="model")}
-    path = tmp_path / "study.toml"
-    path.write_text(tomli_w.dumps(study))
-    assert load_study(path)["description"] == _start()
 
 
 def test_cli_study_layout_targets_hz_initial_and_extra_tables(tmp_path):
@@ -98,6 +94,24 @@ def test_cli_study_layout_targets_hz_initial_and_extra_tables(tmp_path):
     assert [t.label for t in kw["targets"]] == ["f1", "f2", "f3"]
 
 
+def test_cli_uses_the_study_cache(tmp_path, capsys):
+    """`mvtk update --cache DIR` is the updating stage of the pipeline: the second call
+    is served from the cache, a changed option recomputes it."""
+    study = {**_start(), "updating": _updating_table()}
+    path = tmp_path / "study.toml"
+    path.write_text(tomli_w.dumps(study))
+    cache = tmp_path / "out"
+    assert main(["update", str(path), "--json", "--cache", str(cache)]) == 0
+    first = json.loads(capsys.readouterr().out)
+    assert first["cached"] is False and first["schema_version"] == "mvtk.update/1"
+    assert main(["update", str(path), "--json", "--cache", str(cache)]) == 0
+    again = json.loads(capsys.readouterr().out)
+    assert again["cached"] is True and again["updated_values"] == first["updated_values"]
+    assert main(["update", str(path), "--json", "--cache", str(cache), "--max-iter", "2"]) in (
+        0, 1)
+    assert json.loads(capsys.readouterr().out)["cached"] is False
+
+
 @pytest.mark.slow
 def test_cli_runs_the_project_study_layout(tmp_path, capsys):
     """data/smart_beam/study.toml as written by the study stage, on a coarse mesh."""
@@ -110,55 +124,73 @@ def test_cli_runs_the_project_study_layout(tmp_path, capsys):
     (tmp_path / "coarse.toml").write_text(tomli_w.dumps(coarse))
     text = study_file.read_text()
     assert 'file = "../structures/smart_beam.toml"' in text
-    (tmp_path / "study.toml").write_text(
-        text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"'))
+    text = text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"')
+    for name in ("impact", "broadband", "decay"):  # the one schema checks every file
+        f = f"SYNTHETIC_smart_beam_{name}.csv"
+        text = text.replace(f'"{f}"', f'"{(study_file.parent / f).as_posix()}"')
+    (tmp_path / "study.toml").write_text(text)
     assert main(["update", str(tmp_path / "study.toml"), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert max(abs(r["error_pct"]) for r in res["residuals"]) < 0.5
     assert set(res["updated_values"]) == {"materials.steel.E", "boundary.clamp_stiffness"}
 
 
+_BUILDER = "updating_helpers:strip_model"
+
+
 @pytest.mark.parametrize(
-    ("study", "match"),
+    ("updating", "match"),
     [
-        ({"materials": {}}, r"no \[updating\] table \(found keys \['materials'\]\)"),
-        ({"updating": {"parameters": [], "targets": [{"fn_hz": 1.0}]}},
-         "updating.parameters must be a non-empty list"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": []}},
-         "updating.targets must be a non-empty list"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "solver": "lm"}}, r"unknown keys \['solver'\]"),
-        ({"updating": {"parameters": [{"path": "a", "low": 1}], "targets": [{"fn_hz": 1.0}]}},
-         r"updating.parameters\[0\]: unknown keys \['low'\]"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": -1.0}]}},
-         r"updating.targets\[0\]: target -1.0: fn_hz must be positive"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "builder": "no_such_module:f"}}, "cannot import 'no_such_module:f'"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "builder": "nocolon"}}, "expected 'package.module:function'"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "structure_file": "missing.toml"}}, "structure file not found"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "structure_key": "model"}}, "structure_key = 'model' names no table"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
-                       "targets_hz": [1.0]}}, "give exactly one of updating.targets"),
-        ({"updating": {"parameters": [{"path": "a"}], "targets_hz": []}},
-         "updating.targets_hz must be a non-empty list"),
-        ({"updating": {"parameters": [{"path": "x.k", "initial": "big"}],
-                       "targets_hz": [1.0]}}, r"parameters\[0\].initial: expected a number"),
+        (None, r"no \[updating\] section"),
+        ({"parameters": [], "targets": [{"fn_hz": 1.0}]},
+         r"updating.parameters: expected at least 1 table"),
+        ({"parameters": [{"path": "a"}], "targets": []},
+         r"updating.targets: expected at least 1 table"),
+        ({"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}], "solver": "lm"},
+         r"unknown key 'solver' in \[updating\]"),
+        ({"parameters": [{"path": "a", "low": 1}], "targets": [{"fn_hz": 1.0}]},
+         r"unknown key 'low' in \[updating.parameters\[0\]\] \(did you mean 'lower'\?\)"),
+        ({"parameters": [{"path": "a"}], "targets": [{"fn_hz": -1.0}]},
+         r"updating.targets\[0\].fn_hz: expected a number > 0"),
+        ({"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
+          "builder": "no_such_module:f"}, "cannot import 'no_such_module:f'"),
+        ({"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
+          "builder": "nocolon"}, "expected 'package.module:function'"),
+        ({"parameters": [{"path": "a"}], "targets": [{"fn_hz": 1.0}],
+          "targets_hz": [1.0]}, r"give exactly one of \['targets_hz', 'targets'\]"),
+        ({"parameters": [{"path": "a"}], "targets_hz": []},
+         "updating.targets_hz: expected a list of numbers"),
+        ({"parameters": [{"path": "a"}], "targets_hz": [41.1, 13.3]},
+         r"updating.targets_hz: expected frequencies in ascending \(mode\) order"),
+        ({"parameters": [{"path": "x.k", "initial": "big"}], "targets_hz": [1.0]},
+         r"parameters\[0\].initial: expected a number"),
     ],
 )
-def test_cli_study_errors(tmp_path, study, match):
+def test_cli_study_errors(tmp_path, updating, match):
+    study = dict(_start())
+    if updating is not None:
+        study["updating"] = {"builder": _BUILDER, **updating}
+    else:
+        del study["tip_mass"]  # not a structure table of mvtk.fe without a builder
     path = tmp_path / "study.toml"
     path.write_text(tomli_w.dumps(study))
     with pytest.raises(ConfigError, match=match):
+        load_study(path)
+    assert main(["update", str(path)]) == 2
+
+
+def test_cli_missing_structure_file(tmp_path):
+    path = tmp_path / "study.toml"
+    path.write_text(tomli_w.dumps({"structure": {"file": "missing.toml"},
+                                   "updating": _updating_table()}))
+    with pytest.raises(ConfigError, match="structure.file: 'missing.toml' not found"):
         load_study(path)
 
 
 def test_cli_errors_exit_code_and_bad_toml(tmp_path, capsys):
     path = tmp_path / "bad.toml"
     path.write_text("[updating\nx=1")
-    with pytest.raises(FormatError, match="is not valid TOML"):
+    with pytest.raises(ConfigError, match="invalid TOML"):
         load_study(path)
     assert main(["update", str(path)]) == 2
     assert "mvtk update: error:" in capsys.readouterr().err
