@@ -11,7 +11,7 @@ import json
 import warnings
 
 import pytest
-from conftest import assert_same_numbers, copy_run
+from robust_helpers import assert_same_numbers, copy_run
 
 from mvtk.study import run
 from mvtk.study._cache import CacheWarning

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
-from conftest import write_fast_study
+from robust_helpers import write_fast_study
 
 pytestmark = pytest.mark.slow
 

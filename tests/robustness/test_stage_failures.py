@@ -8,7 +8,7 @@ import json
 from pathlib import Path
 
 import pytest
-from conftest import assert_same_numbers, copy_run
+from robust_helpers import assert_same_numbers, copy_run
 
 from mvtk.cli import main
 from mvtk.study import run, study_checks
