@@ -594,14 +594,19 @@ def _from_mapping(d: Mapping[str, Any], where: str, scale: float) -> TestGeometr
 
 def _from_csv(path: Path, scale: float) -> TestGeometry:
     text = path.read_text(encoding="utf-8-sig")
-    reader = csv.DictReader(io.StringIO(text))
+    # '#' lines are comments (a header saying what the table is); line numbers in
+    # messages stay those of the file
+    kept = [(n, ln) for n, ln in enumerate(text.splitlines(), start=1)
+            if not ln.lstrip().startswith("#")]
+    line_no = [n for n, _ in kept]
+    reader = csv.DictReader(io.StringIO("\n".join(ln for _, ln in kept)))
     cols = [c.strip().lower() for c in (reader.fieldnames or [])]
     if not {"node", "x", "y", "z"} <= set(cols):
         raise FormatError(f"{path}: header must have columns node, x, y, z (optional cs, "
                           f"directions); found {cols}")
     lab, xyz, cs, sens = [], [], [], []
     for i, row in enumerate(reader):
-        line = i + 2
+        line = line_no[i + 1] if i + 1 < len(line_no) else i + 2
         row = {k.strip().lower(): (v or "").strip() for k, v in row.items() if k is not None}
         try:
             node = int(row["node"])

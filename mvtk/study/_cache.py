@@ -242,6 +242,12 @@ class TrackedStudy:
             self._tracker.record("file", (str(f),))
         return f
 
+    def extra_file(self, name: str) -> Path:
+        """A further input file of the study (e.g. ``"modal_file"``), its content recorded."""
+        p = self._study.extra_files[name]
+        self._tracker.record("file", (str(p),))
+        return p
+
     @property
     def measurement_files(self) -> dict[str, Path]:
         files = self._study.measurement_files

@@ -89,6 +89,7 @@ class Study:
     structure_file: Path | None
     measurement_files: dict[str, Path] = field(default_factory=dict)
     structure: dict = field(default_factory=dict)
+    extra_files: dict[str, Path] = field(default_factory=dict)
 
     @property
     def name(self) -> str:
@@ -112,7 +113,7 @@ class Study:
         files = [self.path]
         if self.structure_file is not None:
             files.append(self.structure_file)
-        return files + list(self.measurement_files.values())
+        return files + list(self.measurement_files.values()) + list(self.extra_files.values())
 
 
 def load_study(path: str | Path) -> Study:
@@ -162,6 +163,16 @@ def load_study(path: str | Path) -> Study:
     for key, m in meas.items():
         files[key] = _file(root, m["file"], f"measurements.{key}")
 
+    extra: dict[str, Path] = {}
+    if "modal" in cfg:
+        mo = cfg["modal"]
+        extra["modal_file"] = _file(root, mo["file"], "modal")
+        if mo.get("geometry") is not None:
+            extra["modal_geometry"] = _file(root, mo["geometry"], "modal.geometry")
+        if mo["fmax_hz"] <= mo["fmin_hz"]:
+            raise ConfigError(f"modal: expected fmin_hz < fmax_hz, got {mo['fmin_hz']} and "
+                              f"{mo['fmax_hz']} Hz")
+
     if "damping" in cfg:
         d = cfg["damping"]
         fn, bb = d["fn_hz"], d["broadband_fn_hz"]
@@ -202,7 +213,7 @@ def load_study(path: str | Path) -> Study:
 
     cfg["checks"] = {**CHECK_KEYS, **cfg.get("checks", {})}
     return Study(path=p.resolve(), config=cfg, structure_file=structure_file,
-                 measurement_files=files, structure=structure)
+                 measurement_files=files, structure=structure, extra_files=extra)
 
 
 def _check_uncertainty(u: dict) -> None:

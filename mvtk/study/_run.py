@@ -20,34 +20,40 @@ __all__ = ["StudyResult", "run", "STAGES", "STAGE_NEEDS", "check_output_dir"]
 #: Subpackages whose source is part of each stage's cache key.
 _CODE = {
     "ingest": ("io", "study/_stages.py"),
+    "modal": ("io", "modal", "plot", "study/_ema.py"),
+    "correlation": ("fe", "correlation", "plot", "study/_ema.py"),
     "fe": ("fe", "reduction", "study/_stages.py"),
     "damping": ("signal", "damping", "fe", "reduction", "study/_stages.py"),
-    "updating": ("fe", "updating", "study/_stages.py"),
+    "updating": ("fe", "updating", "correlation", "study/_stages.py", "study/_ema.py"),
     "uncertainty": ("fe", "updating", "scale", "study/_stages.py"),
     "reduction": ("fe", "reduction", "control", "study/_stages.py"),
     "control": ("control", "study/_stages.py"),
 }
 
 #: Stage names in execution order.
-STAGES = ("ingest", "fe", "updating", "uncertainty", "damping", "reduction", "control",
-          "report")
+STAGES = ("ingest", "modal", "fe", "updating", "correlation", "uncertainty", "damping",
+          "reduction", "control", "report")
 
 #: Upstream stages whose results each stage consumes (when they are configured).
 STAGE_NEEDS = {
     "ingest": (),
+    "modal": (),
     "fe": (),
-    "updating": (),
+    "updating": ("modal",),
+    "correlation": ("fe", "updating", "modal"),
     "uncertainty": ("fe", "updating"),
     "damping": ("ingest", "fe", "updating"),
     "reduction": ("fe", "updating", "damping"),
     "control": ("fe", "updating", "reduction"),
 }
 #: The section that configures each stage (None: always configured).
-_SECTION = {"ingest": "measurements", "fe": None, "updating": "updating",
+_SECTION = {"ingest": "measurements", "modal": "modal", "correlation": "modal",
+            "fe": None, "updating": "updating",
             "uncertainty": "uncertainty", "damping": "damping", "reduction": "reduction",
             "control": "control"}
 #: Stages that must complete for a stage to run even when their section is absent.
-_HARD = {"uncertainty": ("fe",), "damping": ("ingest", "fe"), "reduction": ("fe",),
+_HARD = {"correlation": ("fe", "modal"), "uncertainty": ("fe",), "damping": ("ingest", "fe"),
+         "reduction": ("fe",),
          "control": ("fe", "reduction")}
 
 
@@ -290,17 +296,24 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
             if name in selected:
                 bar.update(1)
 
+    from . import _ema
     from . import _stages as st
 
     do("ingest", st.ingest)
+    do("modal", _ema.modal)
     do("fe", st.fe_nominal)
-    do("updating", st.updating)
+    do("updating", lambda s: st.updating(s, arrays.get("modal")))
 
     def _description(s: TrackedStudy) -> dict:
         """The updated structure when updating ran, else the nominal one."""
         if "updating" in results:
             return results["updating"]["description"]
         return s.description()
+
+    # the identified shapes against the updated model: MAC, COMAC, non-target predictions
+    do("correlation", lambda s: _ema.correlation(
+        s, arrays["modal"], _description(s), len(results["fe"]["fn_hz"]),
+        results.get("updating", {}).get("targets_hz")))
 
     # Monte Carlo on the updated structure; no later stage depends on it
     do("uncertainty", lambda s: st.uncertainty(s, _description(s)))

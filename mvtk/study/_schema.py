@@ -269,6 +269,26 @@ SCHEMA: dict[str, Table] = {
                          "(listed in damping.broadband_fn_hz).", None, table=_IMPACT),
         "decay": Key("table", "Free decay after release from mode 1.", None, table=_DECAY),
     }),
+    "modal": Table(
+        "A multi-point FRF test identified by mvtk.modal (pLSCF + LSFD). Its shapes pair the "
+        "FE modes by MAC in [updating] and are correlated with the (updated) FE model: "
+        "MAC, COMAC, and the prediction of the modes that were not updating targets.",
+        {"file": Key("path", "FRF file (UFF 58 FRFs with node/direction fields, or any FRF "
+                     "matrix mvtk.io.read returns), relative to the study file.", REQUIRED),
+         "geometry": Key("path", "Test geometry (UFF 15/2411, CSV or TOML table of node, x, "
+                         "y, z in m; None: the UFF 15 records of 'file').", None),
+         "fmin_hz": _pos("Lower end of the identification band.", units="Hz"),
+         "fmax_hz": _pos("Upper end of the identification band.", units="Hz"),
+         "max_order": Key("int", "Highest pLSCF model order (None: mvtk.modal's default).",
+                          None, minimum=4),
+         "mapping": Key("str", "Sensor mapping onto the FE mesh: element shape functions "
+                        "or the nearest node.", "shape", choices=("shape", "nearest")),
+         "tolerance_m": _pos("Largest distance of a sensor from the FE surface.", 0.005, "m"),
+         "pair_updating": Key("bool", "Pair the updating targets with FE modes by MAC "
+                              "against the identified shapes.", True),
+         "pair_within": _pos("Relative frequency window in which an identified mode is "
+                             "attached to an updating target.", 0.03),
+         }),
     "damping": Table("Damping identification (half-power, envelope, Rayleigh fits).", {
         "fn_hz": _freqs("Approximate resonances searched in the impact test, ascending."),
         "broadband_fn_hz": _freqs("Resonances searched in the broadband test, ascending "

@@ -266,13 +266,15 @@ def damping(study: Study, arrays, description: dict):
 
 
 # --------------------------------------------------------------------------- updating
-def updating(study: Study):
+def updating(study: Study, modal_arrays=None):
     """Sensitivity-based update of the configured parameters to the target frequencies.
 
     Reads ``[updating]``: ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables,
     ``parameters`` (a field absent from the structure is created with ``initial``) and
     the solver settings (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``,
-    ``frequency_std``, ``builder``).
+    ``frequency_std``, ``builder``). With a ``[modal]`` test (``modal_arrays``, the
+    identified shapes) and ``modal.pair_updating``, each target carries the identified
+    shape nearest in frequency, so the FE modes are paired by MAC.
     """
     from ..updating import FrequencyTarget, Parameter, update
     from ..updating._cli import _builder, _create_missing
@@ -294,6 +296,13 @@ def updating(study: Study):
     else:
         targets = [FrequencyTarget.from_dict(dict(t), f"updating.targets[{i}]")
                    for i, t in enumerate(cfg["targets"])]
+    attached = [None] * len(targets)
+    modal_cfg = study.section("modal")
+    if modal_arrays is not None and modal_cfg is not None and modal_cfg["pair_updating"]:
+        from ..fe import build_model
+        from ._ema import shape_targets
+
+        targets, attached = shape_targets(study, targets, modal_arrays, build_model(desc))
     kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
               if cfg.get(k) is not None}
     if cfg.get("builder") is not None:
@@ -307,6 +316,9 @@ def updating(study: Study):
         "initial_values": res.initial_values, "values": res.values, "std": res.std,
         "at_bound": res.at_bound,
         "targets_hz": [float(t.fn_hz) for t in targets],
+        "target_test_modes": attached,
+        "pairing": list(res.pairing_method),
+        "mac": [float(v) for v in np.asarray(res.mac, dtype=float)],
         "fn_hz_initial": res.fn_hz_initial, "fn_hz": res.fn_hz,
         "modes": res.modes, "model_fn_hz": res.model_fn_hz,
         "model_kinds": list(res.model_kinds),

@@ -131,3 +131,16 @@ def test_bad_inputs(tmp_path):
                                   nodes=np.array([1, 2])), "add")
     with pytest.raises(FormatError, match=r"no node dataset \(15 or 2411\)"):
         read_test_geometry(p)
+
+
+def test_csv_comment_lines_are_skipped_and_lines_keep_their_numbers(tmp_path):
+    p = tmp_path / "geo.csv"
+    p.write_text("# test geometry of a plate (m)\nnode,x,y,z\n1,0,0,0\n# a note\n2,0.1,0,0\n"
+                 "3,abc,0,0\n", encoding="utf-8")
+    with pytest.raises(FormatError, match="line 6") as err:
+        read_test_geometry(p)
+    assert "geo.csv" in str(err.value)
+    p.write_text("# test geometry\nnode,x,y,z\n1,0,0,0\n# a note\n2,0.1,0,0\n",
+                 encoding="utf-8")
+    g = read_test_geometry(p)
+    assert list(g.node) == [1, 2]
