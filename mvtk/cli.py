@@ -31,6 +31,7 @@ COMMAND_MODULES = (
     "mvtk.updating._cli",
     "mvtk.reduction._cli",
     "mvtk.control._cli",
+    "mvtk.report._cli",
 )
 
 

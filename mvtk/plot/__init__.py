@@ -2,6 +2,7 @@
 
 from ._figures import (
     figure_to_png,
+    minmax_decimate,
     plot_decay,
     plot_frf,
     plot_mode_shapes,
@@ -11,6 +12,7 @@ from ._figures import (
 
 __all__ = [
     "figure_to_png",
+    "minmax_decimate",
     "plot_frf",
     "plot_decay",
     "plot_mode_shapes",
