@@ -138,7 +138,7 @@ def format_number(value: Any, digits: int = 4, floor: float | None = None) -> st
     if 1e-3 <= a < 1e5:
         exp10 = math.floor(math.log10(a))
         decimals = max(digits - 1 - exp10, 0)
-        text = f"{r:.{decimals}f}"
+        text = f"{v:.{decimals}f}"
         return "0" if text in ("-0", "") else _strip_exact(text, v)
     mant, exp = f"{v:.{digits - 1}e}".split("e")
     mant = _strip_exact(mant, v / 10.0 ** int(exp))

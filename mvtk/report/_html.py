@@ -115,10 +115,12 @@ def _table_html(
     csv_href: str | None,
     table_id: str | None,
     formats: Mapping[Any, FormatSpec] | None,
+    show_index: bool | None = None,
 ) -> str:
     if passed_column is not None and passed_column not in df.columns:
         passed_column = None
-    show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
+    if show_index is None:
+        show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
     fmt_df = df.drop(columns=[passed_column]) if passed_column is not None else df
     headers, cells = format_table(fmt_df, formats)
     by_col = dict(zip(fmt_df.columns, zip(*cells))) if len(df) else {}
@@ -209,13 +211,14 @@ def html_table(
     if max_rows < 2:
         raise ParameterError(f"max_rows must be >= 2, got {max_rows}")
     note = ""
+    show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
     if len(df) > max_rows:
         half = max_rows // 2
         note = (f'<p style="font-size:0.85em;color:#555">{len(df) - 2 * half} of '
                 f"{len(df)} rows not shown</p>")
         df = pd.concat([df.iloc[:half], df.iloc[-half:]])
     body = _table_html(df, caption=caption, passed_column=passed_column, csv_href=None,
-                       table_id=None, formats=formats)
+                       table_id=None, formats=formats, show_index=show_index)
     return f"<div><style>{TABLE_CSS}</style>{body}{note}</div>"
 
 
@@ -464,7 +467,7 @@ class Report:
             order["err"] = np.nan
         order = order.sort_values(["failed", "err", "pos"], ascending=[False, False, True],
                                   na_position="last")
-        worst = checks.iloc[order["pos"].to_numpy()[:n_worst]]
+        worst = checks.iloc[order["pos"].to_numpy()[:n_worst]].reset_index(drop=True)
         default = [name_column, "value", "reference", "unit", error_column, "tolerance",
                    passed_column]
         cols = [c for c in (columns or default) if c in worst.columns]
