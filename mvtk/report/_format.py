@@ -179,18 +179,18 @@ def infer_format(name: Any, values: pd.Series | None = None) -> ColumnFormat:
 
     Rules, on the words of the name (split at ``_``, spaces, brackets; first match wins):
 
-    ========================================  =========  ======  =====  ======
-    name contains                              kind       digits  unit   floor
-    ========================================  =========  ======  =====  ======
-    ``pct``, ``percent``, ``%``                percent    3       %      1e-6
-    ``rel`` and ``error``/``residual``         error      3              1e-6
-    ``error``, ``residual``, ``deviation``     error      3
-    ``zeta``, ``damping``                      damping    4
-    ``mac``, ``fraction``, ``coherence``       ratio      4              1e-6
-    ``hz``, ``fn``, ``frequency``              frequency  5       Hz
-    ends in ``s``; ``time``, ``duration``      duration   2       s
-    anything else                              number     4
-    ========================================  =========  ======  =====  ======
+    ======================================  =========  ======  ====  =====
+    name contains                           kind       digits  unit  floor
+    ======================================  =========  ======  ====  =====
+    ``pct``, ``percent``, ``%``             percent    3       %     1e-6
+    ``rel`` and ``error``/``residual``      error      3             1e-6
+    ``error``, ``residual``, ``deviation``  error      3
+    ``zeta``, ``damping``                   damping    4
+    ``mac``, ``fraction``, ``coherence``    ratio      4             1e-6
+    ``hz``, ``fn``, ``frequency``           frequency  5       Hz
+    ends in ``s``; ``time``, ``duration``   duration   2       s
+    anything else                           number     4
+    ======================================  =========  ======  ====  =====
 
     A unit written in the name (``alpha [1/s]``) is kept and suppresses the unit
     rules; a unit suffix (``_hz``, ``_s``, ``_pct``, ``_v``, ``_m``, ``_db``, ``_nm``)

@@ -27,7 +27,7 @@ from ..errors import ParameterError
 from ._format import FormatSpec, dict_table, format_number, format_table
 from ._provenance import Provenance
 
-__all__ = ["Report", "Section", "render_table", "html_table", "TABLE_CSS"]
+__all__ = ["Report", "Section", "render_table", "html_table", "tolerance_used", "TABLE_CSS"]
 
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,80}$")
 _PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
@@ -220,6 +220,60 @@ def html_table(
     body = _table_html(df, caption=caption, passed_column=passed_column, csv_href=None,
                        table_id=None, formats=formats, show_index=show_index)
     return f"<div><style>{TABLE_CSS}</style>{body}{note}</div>"
+
+
+_TOL_REL = re.compile(r"^\s*±\s*([0-9.eE+-]+)\s*%\s*$")
+_TOL_ABS = re.compile(r"^\s*±\s*([0-9.eE+-]+)(\s+\S.*)?$")
+_TOL_BOUND = re.compile(r"^\s*(<=|>=)\s*ref\s*[+-]\s*([0-9.eE+-]+)(\s+\S.*)?$")
+
+
+def tolerance_used(checks: pd.DataFrame, *, error_column: str = "error_pct") -> np.ndarray:
+    """Share of its tolerance each check uses (1.0 = at the limit, > 1 = failed).
+
+    Read from the ``tolerance`` text of :func:`mvtk.validation.check_table`:
+    ``"±X %"`` -> ``|error_pct| / X``; ``"±X unit"`` -> ``|error| / X``;
+    ``"<= ref + X"`` -> ``value / (reference + X)``; ``">= ref - X"`` ->
+    ``(reference - X) / value`` (bounds on positive quantities). ``nan`` where the text
+    is not one of these or the ratio is undefined.
+
+    Parameters
+    ----------
+    checks : DataFrame
+        With columns ``tolerance`` and ``error_column`` / ``error`` / ``value`` /
+        ``reference`` as needed.
+    error_column : str
+        Column of the relative error in percent.
+
+    Returns
+    -------
+    ndarray, shape (len(checks),)
+    """
+    n = len(checks)
+    out = np.full(n, np.nan)
+    if "tolerance" not in checks.columns:
+        return out
+
+    def num(col):
+        if col not in checks.columns:
+            return np.full(n, np.nan)
+        return pd.to_numeric(checks[col], errors="coerce").to_numpy(dtype=float)
+
+    err_pct, err, value, ref = num(error_column), num("error"), num("value"), num("reference")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for i, tol in enumerate(checks["tolerance"].astype(str)):
+            try:
+                if m := _TOL_REL.match(tol):
+                    out[i] = abs(err_pct[i]) / float(m.group(1))
+                elif m := _TOL_BOUND.match(tol):
+                    limit = ref[i] + float(m.group(2)) * (1 if m.group(1) == "<=" else -1)
+                    if limit > 0 and value[i] > 0:
+                        out[i] = value[i] / limit if m.group(1) == "<=" else limit / value[i]
+                elif m := _TOL_ABS.match(tol):
+                    out[i] = abs(err[i]) / float(m.group(1))
+            except (ValueError, ZeroDivisionError):
+                out[i] = np.nan
+    out[~np.isfinite(out)] = np.nan
+    return out
 
 
 def _figure_bytes(figure: Any, image_format: str) -> tuple[str, bytes]:
@@ -425,9 +479,11 @@ class Report:
 
         The summary says what was validated and against what, gives the verdict of
         ``checks`` (PASS only when every check passed; a report without checks has no
-        PASS) and lists the ``n_worst`` checks: failed ones first, then by decreasing
-        ``|error_column|``. Calling it again replaces the summary. The checks are not
-        added to the report's count; add the full table with :meth:`Section.table`.
+        PASS) and lists the ``n_worst`` checks: failed ones first, then the passing
+        ones closest to their limit (largest share of the tolerance used, see
+        :func:`tolerance_used`), then by decreasing ``|error_column|``. Calling it again
+        replaces the summary. The checks are not added to the report's count; add the
+        full table with :meth:`Section.table`.
 
         Parameters
         ----------
@@ -460,16 +516,19 @@ class Report:
                                  f"{n_worst!r}")
         passed = checks[passed_column].astype(bool).to_numpy()
         n, n_ok = len(checks), int(passed.sum())
-        order = pd.DataFrame({"failed": ~passed, "pos": np.arange(n)})
-        if error_column in checks.columns:
-            order["err"] = pd.to_numeric(checks[error_column], errors="coerce").abs().to_numpy()
-        else:
-            order["err"] = np.nan
-        order = order.sort_values(["failed", "err", "pos"], ascending=[False, False, True],
-                                  na_position="last")
+        used = tolerance_used(checks, error_column=error_column)
+        err = (pd.to_numeric(checks[error_column], errors="coerce").abs().to_numpy()
+               if error_column in checks.columns else np.full(n, np.nan))
+        order = pd.DataFrame({"failed": ~passed, "used": used, "err": err,
+                              "pos": np.arange(n)})
+        order = order.sort_values(["failed", "used", "err", "pos"],
+                                  ascending=[False, False, False, True], na_position="last")
         worst = checks.iloc[order["pos"].to_numpy()[:n_worst]].reset_index(drop=True)
+        if np.isfinite(used).any():
+            worst.insert(len(worst.columns), "tolerance_used_pct",
+                         100.0 * used[order["pos"].to_numpy()[:n_worst]])
         default = [name_column, "value", "reference", "unit", error_column, "tolerance",
-                   passed_column]
+                   "tolerance_used_pct", passed_column]
         cols = [c for c in (columns or default) if c in worst.columns]
         missing = [c for c in (columns or []) if c not in checks.columns]
         if missing:

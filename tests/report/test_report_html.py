@@ -10,7 +10,14 @@ import pytest
 
 from mvtk.errors import DimensionError, ParameterError
 from mvtk.plot import figure_to_png, minmax_decimate, plot_frf
-from mvtk.report import Report, collect_provenance, file_sha256, html_table, render_table
+from mvtk.report import (
+    Report,
+    collect_provenance,
+    file_sha256,
+    html_table,
+    render_table,
+    tolerance_used,
+)
 from mvtk.validation import Check, check_table
 
 
@@ -136,9 +143,10 @@ def test_executive_summary_verdict_and_worst_checks():
     assert pos < text.index("<nav>") < text.index('<section id="s1">')
     summary = text[pos:text.index("</section>", pos)]
     assert "FE model and damping of the smart beam" in summary and "paper Tables 2-3" in summary
-    # failed first (largest error first), then the worst passing one; 3 rows only
+    # failed first, then the passing one closest to its limit; 3 rows only
     rows = re.findall(r"<tr><td class=\"text\">(\w+)</td>", summary)
-    assert rows == ["zeta1", "f2", "f4"]
+    assert rows == ["f2", "zeta1", "f4"]  # 938 %, 110 %, 57 % of the tolerance used
+    assert "<th>tolerance_<wbr>used [%]</th>" in summary and "<td>938</td>" in summary
     assert summary.count('class="fail"') == 2 and summary.count('class="pass"') == 1
     assert rep.n_checks == 5  # the summary does not count the checks twice
 
@@ -148,6 +156,23 @@ def test_executive_summary_verdict_and_worst_checks():
     none = Report("none")
     none.executive_summary(checks.iloc[:0], validated="x", against="y")
     assert none.summary_verdict.startswith("NO VERDICT") and "PASS" not in none.to_html()
+
+
+def test_tolerance_used_matches_the_check_definitions():
+    checks = [Check("f1", 13.3, 13.26, 0.01, "Hz"),                     # relative
+              Check("x", 1.05, 1.0, 0.1, "m", kind="absolute"),
+              Check("peak voltage", 93.52, 100.0, 0.0, "V", kind="upper"),
+              Check("closed-loop zeta", 0.1038, 0.005, 0.0, kind="lower"),
+              Check("zero ref", 0.1, 0.0, 0.5, kind="absolute")]
+    used = tolerance_used(check_table(checks))
+    expect = [abs(checks[0].relative_error) / 0.01, 0.05 / 0.1, 93.52 / 100.0, 0.005 / 0.1038,
+              0.1 / 0.5]
+    np.testing.assert_allclose(used, expect, rtol=1e-9)
+    # a check at its limit uses 100 %; a failed one more
+    at = check_table([Check("a", 1.01, 1.0, 0.01), Check("b", 1.02, 1.0, 0.01)])
+    np.testing.assert_allclose(tolerance_used(at), [1.0, 2.0], rtol=1e-9)
+    assert np.isnan(tolerance_used(pd.DataFrame({"tolerance": ["about right"]}))).all()
+    assert np.isnan(tolerance_used(pd.DataFrame({"x": [1.0]}))).all()
 
 
 def test_executive_summary_bad_inputs():
