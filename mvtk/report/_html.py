@@ -24,7 +24,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
-from ._format import FormatSpec, dict_table, format_number, format_table
+from ._format import ColumnFormat, FormatSpec, dict_table, format_number, format_table
 from ._provenance import Provenance
 
 __all__ = ["Report", "Section", "render_table", "html_table", "tolerance_used", "TABLE_CSS"]
@@ -40,6 +40,7 @@ table.mvtk { border-collapse: collapse; font-size: 0.88em;
 table.mvtk th, table.mvtk td { border: 1px solid #bbc; padding: 0.25em 0.45em;
              text-align: right; vertical-align: top; }
 table.mvtk th { background: #eef; vertical-align: bottom; }
+table.mvtk th.text { text-align: left; }
 table.mvtk td { white-space: nowrap; }
 table.mvtk td.text { text-align: left; white-space: normal; overflow-wrap: anywhere;
              min-width: 3em; max-width: 32em; }
@@ -133,9 +134,13 @@ def _table_html(
         parts.append(f"<caption>{html.escape(caption)}{link}</caption>")
     hdr_by_col = dict(zip(fmt_df.columns, headers))
     # headers may break after "_" (zeta Rayleigh (least_squares)) to keep columns narrow
-    ths = idx_hdr + [html.escape(hdr_by_col.get(c, str(c))).replace("_", "_<wbr>")
-                     for c in df.columns]
-    parts.append("<thead><tr>" + "".join(f"<th>{h}</th>" for h in ths) + "</tr></thead>")
+    ths = [(h, True) for h in idx_hdr] + [
+        (html.escape(hdr_by_col.get(c, str(c))).replace("_", "_<wbr>"),
+         len(df) > 0 and all(isinstance(v, str) for v in df[c].tolist()))
+        for c in df.columns]
+    parts.append("<thead><tr>" + "".join(
+        f'<th class="text">{h}</th>' if is_text else f"<th>{h}</th>" for h, is_text in ths)
+        + "</tr></thead>")
     parts.append("<tbody>")
     for i, (idx, row) in enumerate(zip(df.index, df.itertuples(index=False))):
         tds = []
@@ -550,9 +555,12 @@ class Report:
         ]
         if n:
             title = (f"The {min(n_worst, n)} worst checks" if n > 1 else "The check")
-            parts.append(render_table(worst[cols], caption=title,
-                                      passed_column=passed_column,
-                                      table_id="table-summary-worst"))
+            parts.append(render_table(
+                worst[cols], caption=title, passed_column=passed_column,
+                table_id="table-summary-worst",
+                formats={"tolerance_used_pct": ColumnFormat(
+                    "percent", 3, "%", label="share of tolerance used")}
+                if "tolerance_used_pct" in cols else None))
         if self.unavailable:
             parts.append("<p>Some stages were not available (listed below); their checks "
                          "are missing from this verdict.</p>")
@@ -571,7 +579,11 @@ class Report:
 
     def to_html(self) -> str:
         """The whole page as a string."""
-        if self.n_checks:
+        if self.n_checks and self.summary_html:
+            # the executive summary carries the verdict; this line counts every table
+            summary = (f'<p id="verdict">Pass/fail cells in all tables of this report: '
+                       f"{self.n_passed} of {self.n_checks} checks passed</p>")
+        elif self.n_checks:
             ok = self.n_passed == self.n_checks
             summary = (
                 f'<p class="verdict {"pass" if ok else "fail"}" id="verdict">'

@@ -100,7 +100,7 @@ def test_report_bad_inputs():
 def test_render_table_index_and_nan():
     df = pd.DataFrame({"FE": [13.81, np.nan]}, index=pd.RangeIndex(1, 3, name="mode"))
     html = render_table(df, caption="T2")
-    assert "<th>mode</th>" in html and "–" in html and "13.81" in html
+    assert "<th class=\"text\">mode</th>" in html and "–" in html and "13.81" in html
     assert html.startswith('<div class="mvtk-table-wrap">') and html.endswith("</div>")
 
 
@@ -146,7 +146,8 @@ def test_executive_summary_verdict_and_worst_checks():
     # failed first, then the passing one closest to its limit; 3 rows only
     rows = re.findall(r"<tr><td class=\"text\">(\w+)</td>", summary)
     assert rows == ["f2", "zeta1", "f4"]  # 938 %, 110 %, 57 % of the tolerance used
-    assert "<th>tolerance_<wbr>used [%]</th>" in summary and "<td>938</td>" in summary
+    assert "<th>share of tolerance used [%]</th>" in summary and "<td>938</td>" in summary
+    assert '<th class="text">check</th>' in summary  # text columns: headers left-aligned
     assert summary.count('class="fail"') == 2 and summary.count('class="pass"') == 1
     assert rep.n_checks == 5  # the summary does not count the checks twice
 
