@@ -66,7 +66,7 @@ h1 { border-bottom: 2px solid #335; }
 h2 { border-bottom: 1px solid #aab; margin-top: 2em; }
 $table_css
 figure { margin: 1em 0; max-width: 100%; }
-figure img { display: block; box-sizing: border-box; width: 100%; max-width: 50em;
+figure img { display: block; box-sizing: border-box; width: 100%; max-width: 702px;
              height: auto;
              border: 1px solid #ddd; }
 figcaption { font-size: 0.9em; color: #444; }
@@ -302,11 +302,17 @@ def _figure_bytes(figure: Any, image_format: str) -> tuple[str, bytes]:
     if image_format not in ("auto", "png", "svg"):
         raise ParameterError(f"image_format must be 'auto', 'png' or 'svg', got "
                              f"{image_format!r}")
+    import matplotlib
+
     out = {}
     for fmt in (("png", "svg") if image_format == "auto" else (image_format,)):
         buf = io.BytesIO()
-        kw = {"dpi": 100} if fmt == "png" else {"metadata": {"Date": None}}
-        figure.savefig(buf, format=fmt, **kw)
+        if fmt == "png":
+            figure.savefig(buf, format="png", dpi=100)
+        else:
+            # text as <text> (not glyph paths): smaller, selectable, searchable in the PDF
+            with matplotlib.rc_context({"svg.fonttype": "none"}):
+                figure.savefig(buf, format="svg", metadata={"Date": None})
         out[fmt] = buf.getvalue()
     fmt = min(out, key=lambda k: len(out[k]))
     return ("image/png" if fmt == "png" else "image/svg+xml"), out[fmt]

@@ -22,6 +22,9 @@ from mvtk.plot import plot_decay, plot_frf, plot_mode_shapes, plot_spectra, plot
 from mvtk.report import Report, collect_provenance, to_pdf
 from mvtk.validation import Check, check_table, frequency_table
 
+# a real browser per test (3-20 s each on a shared 2-core machine); still run by CI
+pytestmark = pytest.mark.slow
+
 _spec = importlib.util.spec_from_file_location(
     "mvtk_tests_chromium", Path(__file__).with_name("_chromium.py"))
 cr = importlib.util.module_from_spec(_spec)

@@ -206,21 +206,29 @@ def test_html_table_for_notebook_reprs():
 
 
 def test_figure_format_auto_picks_the_smaller():
-    from mvtk.plot import plot_mode_shapes
+    import matplotlib
+    from matplotlib.figure import Figure
 
     rep = Report("f")
     sec = rep.section("s")
-    line = plot_frf(np.linspace(1, 30, 300), 1 / (13**2 - np.linspace(1, 30, 300)**2 + 1j))
-    gx, gy = np.meshgrid(np.linspace(0, 0.18, 40), np.linspace(0, 0.13, 30))
-    nodes = np.c_[gx.ravel(), gy.ravel(), np.zeros(gx.size)]
-    contour = plot_mode_shapes(nodes, np.c_[np.sin(20 * nodes[:, 0]) * nodes[:, 1]], [13.3])
+    # a few vector strokes: smaller as SVG
+    line = Figure(figsize=(7, 3))
+    ax = line.add_axes((0, 0, 1, 1))
+    ax.plot([0, 1, 2, 3], [0, 1, 0, 1])
+    ax.axis("off")
+    # a raster (e.g. a dense measured field): SVG would embed it as base64 PNG -> larger
+    contour = Figure(figsize=(7, 3))
+    contour.add_subplot().imshow(np.random.default_rng(1).random((150, 300)))
     sizes = {}
     for name, fig in (("line", line), ("contour", contour)):
         for fmt in ("png", "svg"):
             buf = io.BytesIO()
-            fig.savefig(buf, format=fmt, **({"dpi": 100} if fmt == "png" else {}))
+            with matplotlib.rc_context({"svg.fonttype": "none"}):
+                fig.savefig(buf, format=fmt, **({"dpi": 100} if fmt == "png" else {}))
             sizes[name, fmt] = len(buf.getvalue())
         sec.figure(fig, name)
+    assert sizes["line", "svg"] < sizes["line", "png"]  # both choices are exercised
+    assert sizes["contour", "png"] < sizes["contour", "svg"]
     mimes = re.findall(r'src="data:([^;]+);base64', "".join(sec.blocks))
     expect = ["image/svg+xml" if sizes[n, "svg"] < sizes[n, "png"] else "image/png"
               for n in ("line", "contour")]
@@ -284,10 +292,12 @@ def test_to_pdf_and_cli_bad_inputs(tmp_path, capsys):
         to_pdf(tmp_path / "nowhere")
     assert main(["report", str(tmp_path / "nowhere")]) == 2
     assert "is not a report: no index.html there" in capsys.readouterr().err
-    page = _small_report().write(tmp_path / "rep")
+    rep = Report("cli")
+    rep.section("Checks").table(_checks(), "checks")
+    page = rep.write(tmp_path / "rep")
     assert main(["report", str(page.parent)]) == 0
     out = capsys.readouterr().out
-    assert f"report: {page}" in out and "verdict: 1 of 2 checks passed" in out
+    assert f"report: {page}" in out and "verdict: 3 of 5 checks passed" in out
 
 
 def test_provenance_hashes_and_versions(tmp_path):
