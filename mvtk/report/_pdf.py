@@ -99,9 +99,10 @@ def to_pdf(
             raise PdfExportError(f"Chromium did not finish printing {page} within "
                                  f"{timeout:g} s") from None
     if res.returncode != 0 or not out.is_file() or out.stat().st_size == 0:
-        tail = (res.stderr or "").strip().splitlines()[-5:]
+        tail = " | ".join((res.stderr or "").strip().splitlines()[-5:])
+        out.unlink(missing_ok=True)
         raise PdfExportError(f"Chromium ({exe}) failed to print {page} to {out} (exit code "
-                             f"{res.returncode}): {' | '.join(tail)}")
+                             f"{res.returncode})" + (f": {tail}" if tail else ""))
     if not out.read_bytes()[:5] == b"%PDF-":
         raise PdfExportError(f"Chromium wrote {out} but it is not a PDF file")
     return out

@@ -325,3 +325,20 @@ def test_plot_bad_inputs():
     with pytest.raises(DimensionError, match="f_hz must be a 1-D array"):
         plot_frf([[1, 2]], [1, 2])
     assert figure_to_png(plot_frf([1, 2, 3], [1, 2, 3])).startswith(b"\x89PNG")
+
+
+def test_pdf_refused_clearly_without_chromium(tmp_path, monkeypatch):
+    from mvtk.errors import MissingDependencyError
+    from mvtk.report import PdfExportError, to_pdf
+
+    rep = Report("no browser")
+    rep.section("Checks").table(_checks(), "checks")
+    monkeypatch.setenv("MVTK_CHROMIUM", str(tmp_path / "no-such-chromium"))
+    with pytest.raises(MissingDependencyError, match="install the Debian package 'chromium'"):
+        rep.to_pdf(tmp_path / "out")
+    assert (tmp_path / "out" / "index.html").is_file()  # the HTML report is still written
+    # a "browser" that fails: the error names the exit code, no half-written PDF is left
+    monkeypatch.setenv("MVTK_CHROMIUM", "false")
+    with pytest.raises(PdfExportError, match=r"failed to print .* \(exit code 1\)"):
+        to_pdf(tmp_path / "out")
+    assert not (tmp_path / "out" / "report.pdf").exists()
