@@ -284,6 +284,10 @@ def format_table(
     cells : list of list of str
         ``cells[i][j]`` is row ``i``, column ``j``.
     """
+    if df.columns.has_duplicates:
+        dup = sorted({str(c) for c in df.columns[df.columns.duplicated()]})
+        raise ParameterError(f"table has duplicate column names {dup}; give each column a "
+                             "unique name")
     formats = dict(formats or {})
     unknown = [k for k in formats if k not in df.columns]
     if unknown:

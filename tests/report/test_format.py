@@ -98,6 +98,8 @@ def test_format_bad_inputs():
         format_table(pd.DataFrame({"a": [1.0]}), formats={"nope": 3})
     with pytest.raises(ParameterError, match="format of column 'a' must be a ColumnFormat"):
         format_table(pd.DataFrame({"a": [1.0]}), formats={"a": "%.3f"})
+    with pytest.raises(ParameterError, match=r"duplicate column names \['a'\]"):
+        format_table(pd.DataFrame([[1, 2]], columns=["a", "a"]))
     with pytest.raises(ParameterError, match="kind must be one of"):
         ColumnFormat("speed")
     with pytest.raises(ParameterError, match="digits must be an integer >= 1, got 0"):
