@@ -43,6 +43,7 @@ COMMAND_MODULES = (
     "mvtk.control._cli",
     "mvtk.modal._cli",
     "mvtk.correlation._cli",
+    "mvtk.report._cli",
 )
 
 

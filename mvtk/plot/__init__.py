@@ -3,6 +3,7 @@
 from ._correlation import plot_mac, plot_paired_shapes, plot_test_on_mesh
 from ._figures import (
     figure_to_png,
+    minmax_decimate,
     plot_decay,
     plot_frf,
     plot_mode_shapes,
@@ -13,6 +14,7 @@ from ._modal import plot_automac, plot_frf_synthesis, plot_stabilisation
 
 __all__ = [
     "figure_to_png",
+    "minmax_decimate",
     "plot_frf",
     "plot_decay",
     "plot_mode_shapes",

@@ -1,7 +1,15 @@
-"""Self-contained HTML reports: sections, tables (also as CSV), figures, provenance."""
+"""Self-contained HTML reports: sections, tables (also as CSV), figures, provenance, PDF.
 
-from ._html import Report, Section, render_table
+Numbers in tables are formatted by quantity (:func:`infer_format`); :func:`html_table`
+gives result objects a notebook ``_repr_html_`` with the same formatting.
+"""
+
+from ._format import ColumnFormat, dict_table, format_number, format_table, infer_format
+from ._html import TABLE_CSS, Report, Section, html_table, render_table, tolerance_used
+from ._pdf import PdfExportError, find_chromium, to_pdf
 from ._provenance import Provenance, collect_provenance, file_sha256
 
-__all__ = ["Report", "Section", "render_table", "Provenance", "collect_provenance",
+__all__ = ["Report", "Section", "render_table", "html_table", "tolerance_used", "TABLE_CSS",
+           "ColumnFormat", "format_number", "format_table", "infer_format", "dict_table",
+           "to_pdf", "find_chromium", "PdfExportError", "Provenance", "collect_provenance",
            "file_sha256"]

@@ -1,7 +1,10 @@
-"""A self-contained HTML report: sections, pandas tables with pass/fail, PNG figures.
+"""A self-contained HTML report: sections, pandas tables with pass/fail, figures.
 
-The page has no script and no external resource (figures are embedded as base64 PNG,
-styles are inline), so it opens offline. Each table is also written as CSV next to
+The page has no script and no external resource (figures are embedded as base64 SVG or
+PNG, whichever is smaller; styles are inline), so it opens offline and prints to PDF
+(:func:`mvtk.report.to_pdf`). Table cells are formatted by quantity
+(:mod:`mvtk.report._format`) and each table sits in a box that scrolls horizontally when
+the window is too narrow. Each table is also written, unformatted, as CSV next to
 ``index.html`` under ``tables/``.
 """
 
@@ -10,9 +13,8 @@ from __future__ import annotations
 import base64
 import html
 import io
-import json
-import math
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from string import Template
@@ -22,12 +24,33 @@ import numpy as np
 import pandas as pd
 
 from ..errors import ParameterError
+from ._format import ColumnFormat, FormatSpec, dict_table, format_number, format_table
 from ._provenance import Provenance
 
-__all__ = ["Report", "Section", "render_table"]
+__all__ = ["Report", "Section", "render_table", "html_table", "tolerance_used", "TABLE_CSS"]
 
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,80}$")
 _PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+#: Table styles shared by the report page and the notebook reprs (:func:`html_table`).
+TABLE_CSS = """
+.mvtk-table-wrap { max-width: 100%; overflow-x: auto; margin: 0.8em 0; }
+table.mvtk { border-collapse: collapse; font-size: 0.88em;
+             font-variant-numeric: tabular-nums; }
+table.mvtk th, table.mvtk td { border: 1px solid #bbc; padding: 0.25em 0.45em;
+             text-align: right; vertical-align: top; }
+table.mvtk th { background: #eef; vertical-align: bottom; }
+table.mvtk th.text { text-align: left; }
+table.mvtk td { white-space: nowrap; }
+table.mvtk td.text { text-align: left; white-space: normal; overflow-wrap: anywhere;
+             min-width: 3em; max-width: 32em; }
+table.mvtk td.pass { background: #d7f5d7; color: #0a5a0a; font-weight: bold;
+             text-align: center; }
+table.mvtk td.fail { background: #fbd5d5; color: #8a0b0b; font-weight: bold;
+             text-align: center; }
+table.mvtk caption { caption-side: top; text-align: left; font-weight: bold;
+             padding: 0.3em 0; }
+"""
 
 _PAGE = Template(
     """<!DOCTYPE html>
@@ -37,26 +60,37 @@ _PAGE = Template(
 <meta name="viewport" content="width=device-width, initial-scale=1">
 <title>$title</title>
 <style>
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 70em;
+body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 80em;
        padding: 0 1em; color: #222; line-height: 1.4; }
 h1 { border-bottom: 2px solid #335; }
 h2 { border-bottom: 1px solid #aab; margin-top: 2em; }
-table { border-collapse: collapse; margin: 0.8em 0; font-size: 0.92em; }
-th, td { border: 1px solid #bbc; padding: 0.25em 0.6em; text-align: right; }
-th { background: #eef; }
-td.text { text-align: left; }
-td.pass { background: #d7f5d7; color: #0a5a0a; font-weight: bold; text-align: center; }
-td.fail { background: #fbd5d5; color: #8a0b0b; font-weight: bold; text-align: center; }
-caption { caption-side: top; text-align: left; font-weight: bold; padding: 0.3em 0; }
-figure { margin: 1em 0; }
-figure img { max-width: 100%; border: 1px solid #ddd; }
+$table_css
+figure { margin: 1em 0; max-width: 100%; }
+figure img { display: block; box-sizing: border-box; width: 100%; max-width: 702px;
+             height: auto;
+             border: 1px solid #ddd; }
 figcaption { font-size: 0.9em; color: #444; }
 .verdict { font-size: 1.2em; padding: 0.5em 1em; border-radius: 4px; display: inline-block; }
 .verdict.pass { background: #d7f5d7; } .verdict.fail { background: #fbd5d5; }
+.executive { border: 2px solid #335; border-radius: 6px; padding: 0.2em 1em 0.6em;
+             margin: 1em 0; }
+.executive h2 { margin-top: 0.5em; }
 .unavailable { background: #fff4d6; border-left: 4px solid #e0a800; padding: 0.5em 1em; }
 .synthetic { background: #e8f0ff; border-left: 4px solid #3a6fd8; padding: 0.5em 1em; }
 pre { background: #f6f6f8; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
-a.csv { font-size: 0.85em; }
+a.csv { font-size: 0.85em; font-weight: normal; }
+@page { size: A4; margin: 14mm 12mm; }
+@media print {
+  body { margin: 0; max-width: none; padding: 0; font-size: 10pt; }
+  nav, a.csv { display: none; }
+  h2 { break-after: avoid; }
+  .mvtk-table-wrap { overflow: visible; }
+  table.mvtk { font-size: 7.5pt; }
+  table.mvtk th, table.mvtk td { padding: 0.2em 0.3em; }
+  table.mvtk tr, figure, .executive { break-inside: avoid; }
+  figure img { max-width: 100%; }
+  pre { white-space: pre-wrap; overflow-wrap: anywhere; }
+}
 </style>
 </head>
 <body>
@@ -71,14 +105,58 @@ $body
 
 
 def _fmt(value: Any) -> str:
-    if isinstance(value, bool | np.bool_):
-        return "yes" if value else "no"
-    if isinstance(value, float | np.floating):
-        v = float(value)
-        if math.isnan(v):
-            return "–"
-        return f"{v:.6g}"
-    return str(value)
+    return format_number(value, digits=6)
+
+
+def _table_html(
+    df: pd.DataFrame,
+    *,
+    caption: str,
+    passed_column: str | None,
+    csv_href: str | None,
+    table_id: str | None,
+    formats: Mapping[Any, FormatSpec] | None,
+    show_index: bool | None = None,
+) -> str:
+    if passed_column is not None and passed_column not in df.columns:
+        passed_column = None
+    if show_index is None:
+        show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
+    fmt_df = df.drop(columns=[passed_column]) if passed_column is not None else df
+    headers, cells = format_table(fmt_df, formats)
+    by_col = dict(zip(fmt_df.columns, zip(*cells))) if len(df) else {}
+    idx_hdr = [html.escape(str(df.index.name or ""))] if show_index else []
+    parts = ['<div class="mvtk-table-wrap">']
+    parts.append(f'<table class="mvtk" id="{html.escape(table_id)}">' if table_id
+                 else '<table class="mvtk">')
+    if caption or csv_href:
+        link = f' <a class="csv" href="{html.escape(csv_href)}">[CSV]</a>' if csv_href else ""
+        parts.append(f"<caption>{html.escape(caption)}{link}</caption>")
+    hdr_by_col = dict(zip(fmt_df.columns, headers))
+    # headers may break after "_" (zeta Rayleigh (least_squares)) to keep columns narrow
+    ths = [(h, True) for h in idx_hdr] + [
+        (html.escape(hdr_by_col.get(c, str(c))).replace("_", "_<wbr>"),
+         len(df) > 0 and all(isinstance(v, str) for v in df[c].tolist()))
+        for c in df.columns]
+    parts.append("<thead><tr>" + "".join(
+        f'<th class="text">{h}</th>' if is_text else f"<th>{h}</th>" for h, is_text in ths)
+        + "</tr></thead>")
+    parts.append("<tbody>")
+    for i, (idx, row) in enumerate(zip(df.index, df.itertuples(index=False))):
+        tds = []
+        if show_index:
+            tds.append(f'<td class="text">{html.escape(_fmt(idx))}</td>')
+        for col, val in zip(df.columns, row):
+            if col == passed_column:
+                ok = bool(val)
+                cls, label = ("pass", "PASS") if ok else ("fail", "FAIL")
+                tds.append(f'<td class="{cls}">{label}</td>')
+            else:
+                cls = ' class="text"' if isinstance(val, str) else ""
+                tds.append(f"<td{cls}>{html.escape(by_col[col][i])}</td>")
+        parts.append("<tr>" + "".join(tds) + "</tr>")
+    parts.append("</tbody></table></div>")
+    return "\n".join(parts)
 
 
 def render_table(
@@ -88,52 +166,156 @@ def render_table(
     passed_column: str | None = "passed",
     csv_href: str | None = None,
     table_id: str | None = None,
+    formats: Mapping[Any, FormatSpec] | None = None,
 ) -> str:
-    """HTML of ``df`` (escaped), with the ``passed_column`` shown as styled PASS/FAIL.
+    """HTML of ``df`` (escaped, numbers formatted by quantity) in a horizontal scroll box.
 
-    The index is shown as the first column when it is named or not a default
-    RangeIndex.
+    Parameters
+    ----------
+    df : DataFrame
+        The index is shown as the first column when it is named or not a default
+        RangeIndex.
+    caption : str
+    passed_column : str or None
+        Boolean column shown as styled PASS/FAIL (ignored when absent).
+    csv_href : str, optional
+        Link to the CSV of the table, shown in the caption.
+    table_id : str, optional
+        ``id`` of the ``<table>`` element.
+    formats : mapping of column to ColumnFormat, int or callable, optional
+        Per-column overrides of the formatting inferred from the column names (see
+        :func:`mvtk.report.infer_format`); an int is a number of significant digits.
     """
+    if not isinstance(df, pd.DataFrame):
+        raise ParameterError(f"render_table expects a pandas DataFrame, got {type(df).__name__}")
+    return _table_html(df, caption=caption, passed_column=passed_column, csv_href=csv_href,
+                       table_id=table_id, formats=formats)
+
+
+def html_table(
+    df: pd.DataFrame,
+    *,
+    caption: str = "",
+    passed_column: str | None = "passed",
+    formats: Mapping[Any, FormatSpec] | None = None,
+    max_rows: int = 60,
+) -> str:
+    """A table for a notebook ``_repr_html_``, formatted exactly as in the report.
+
+    Self-contained (carries its own ``<style>``), long tables are cut to the first and
+    last ``max_rows // 2`` rows with a note of how many were left out.
+
+    Examples
+    --------
+    >>> class DampingResult:                      # doctest: +SKIP
+    ...     def _repr_html_(self):
+    ...         return html_table(self.to_dataframe(), caption="Damping per mode")
+    """
+    if not isinstance(df, pd.DataFrame):
+        raise ParameterError(f"html_table expects a pandas DataFrame, got {type(df).__name__}")
+    if max_rows < 2:
+        raise ParameterError(f"max_rows must be >= 2, got {max_rows}")
+    note = ""
     show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
-    headers = ([df.index.name or ""] if show_index else []) + [str(c) for c in df.columns]
-    parts = [f'<table id="{html.escape(table_id)}">' if table_id else "<table>"]
-    if caption or csv_href:
-        link = f' <a class="csv" href="{html.escape(csv_href)}">[CSV]</a>' if csv_href else ""
-        parts.append(f"<caption>{html.escape(caption)}{link}</caption>")
-    parts.append("<thead><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in headers))
-    parts.append("</tr></thead><tbody>")
-    for idx, row in zip(df.index, df.itertuples(index=False)):
-        cells = []
-        if show_index:
-            cells.append(f'<td class="text">{html.escape(_fmt(idx))}</td>')
-        for col, val in zip(df.columns, row):
-            if passed_column is not None and col == passed_column:
-                ok = bool(val)
-                cls, label = ("pass", "PASS") if ok else ("fail", "FAIL")
-                cells.append(f'<td class="{cls}">{label}</td>')
-            else:
-                cls = ' class="text"' if isinstance(val, str) else ""
-                cells.append(f"<td{cls}>{html.escape(_fmt(val))}</td>")
-        parts.append("<tr>" + "".join(cells) + "</tr>")
-    parts.append("</tbody></table>")
-    return "\n".join(parts)
+    if len(df) > max_rows:
+        half = max_rows // 2
+        note = (f'<p style="font-size:0.85em;color:#555">{len(df) - 2 * half} of '
+                f"{len(df)} rows not shown</p>")
+        df = pd.concat([df.iloc[:half], df.iloc[-half:]])
+    body = _table_html(df, caption=caption, passed_column=passed_column, csv_href=None,
+                       table_id=None, formats=formats, show_index=show_index)
+    return f"<div><style>{TABLE_CSS}</style>{body}{note}</div>"
 
 
-def _png_bytes(figure: Any) -> bytes:
+_TOL_REL = re.compile(r"^\s*±\s*([0-9.eE+-]+)\s*%\s*$")
+_TOL_ABS = re.compile(r"^\s*±\s*([0-9.eE+-]+)(\s+\S.*)?$")
+_TOL_BOUND = re.compile(r"^\s*(<=|>=)\s*ref\s*[+-]\s*([0-9.eE+-]+)(\s+\S.*)?$")
+
+
+def tolerance_used(checks: pd.DataFrame, *, error_column: str = "error_pct") -> np.ndarray:
+    """Share of its tolerance each check uses (1.0 = at the limit, > 1 = failed).
+
+    Read from the ``tolerance`` text of :func:`mvtk.validation.check_table`:
+    ``"±X %"`` -> ``|error_pct| / X``; ``"±X unit"`` -> ``|error| / X``;
+    ``"<= ref + X"`` -> ``value / (reference + X)``; ``">= ref - X"`` ->
+    ``(reference - X) / value`` (bounds on positive quantities). ``nan`` where the text
+    is not one of these or the ratio is undefined.
+
+    Parameters
+    ----------
+    checks : DataFrame
+        With columns ``tolerance`` and ``error_column`` / ``error`` / ``value`` /
+        ``reference`` as needed.
+    error_column : str
+        Column of the relative error in percent.
+
+    Returns
+    -------
+    ndarray, shape (len(checks),)
+    """
+    n = len(checks)
+    out = np.full(n, np.nan)
+    if "tolerance" not in checks.columns:
+        return out
+
+    def num(col):
+        if col not in checks.columns:
+            return np.full(n, np.nan)
+        return pd.to_numeric(checks[col], errors="coerce").to_numpy(dtype=float)
+
+    err_pct, err, value, ref = num(error_column), num("error"), num("value"), num("reference")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for i, tol in enumerate(checks["tolerance"].astype(str)):
+            try:
+                if m := _TOL_REL.match(tol):
+                    out[i] = abs(err_pct[i]) / float(m.group(1))
+                elif m := _TOL_BOUND.match(tol):
+                    limit = ref[i] + float(m.group(2)) * (1 if m.group(1) == "<=" else -1)
+                    if limit > 0 and value[i] > 0:
+                        out[i] = value[i] / limit if m.group(1) == "<=" else limit / value[i]
+                elif m := _TOL_ABS.match(tol):
+                    out[i] = abs(err[i]) / float(m.group(1))
+            except (ValueError, ZeroDivisionError):
+                out[i] = np.nan
+    out[~np.isfinite(out)] = np.nan
+    return out
+
+
+def _figure_bytes(figure: Any, image_format: str) -> tuple[str, bytes]:
+    """(mime type, bytes) of a figure; ``auto`` renders SVG and PNG and keeps the smaller."""
     if isinstance(figure, bytes | bytearray):
         data = bytes(figure)
-    elif hasattr(figure, "savefig"):
-        buf = io.BytesIO()
-        figure.savefig(buf, format="png", dpi=100)
-        data = buf.getvalue()
-    else:
+        if data.startswith(_PNG_MAGIC):
+            return "image/png", data
+        head = data[:400].lstrip()
+        if head.startswith(b"<?xml") or head.startswith(b"<svg"):
+            if b"<svg" not in data[:2000]:
+                raise ParameterError("figure bytes look like XML but contain no <svg> element")
+            return "image/svg+xml", data
+        raise ParameterError("figure bytes are not a PNG image (missing PNG signature) "
+                             "nor an SVG document")
+    if not hasattr(figure, "savefig"):
         raise ParameterError(
-            "a report figure must be PNG bytes or a matplotlib Figure, "
+            "a report figure must be PNG/SVG bytes or a matplotlib Figure, "
             f"got {type(figure).__name__}"
         )
-    if not data.startswith(_PNG_MAGIC):
-        raise ParameterError("figure bytes are not a PNG image (missing PNG signature)")
-    return data
+    if image_format not in ("auto", "png", "svg"):
+        raise ParameterError(f"image_format must be 'auto', 'png' or 'svg', got "
+                             f"{image_format!r}")
+    import matplotlib
+
+    out = {}
+    for fmt in (("png", "svg") if image_format == "auto" else (image_format,)):
+        buf = io.BytesIO()
+        if fmt == "png":
+            figure.savefig(buf, format="png", dpi=100)
+        else:
+            # text as <text> (not glyph paths): smaller, selectable, searchable in the PDF
+            with matplotlib.rc_context({"svg.fonttype": "none"}):
+                figure.savefig(buf, format="svg", metadata={"Date": None})
+        out[fmt] = buf.getvalue()
+    fmt = min(out, key=lambda k: len(out[k]))
+    return ("image/png" if fmt == "png" else "image/svg+xml"), out[fmt]
 
 
 @dataclass
@@ -171,8 +353,9 @@ class Section:
         name: str,
         caption: str = "",
         passed_column: str | None = "passed",
+        formats: Mapping[Any, FormatSpec] | None = None,
     ) -> Section:
-        """Add a table; it is also written as ``tables/<name>.csv``.
+        """Add a table; it is also written (unformatted) as ``tables/<name>.csv``.
 
         Parameters
         ----------
@@ -182,6 +365,9 @@ class Section:
         caption : str
         passed_column : str or None
             Boolean column shown as PASS/FAIL and counted in the report's verdict.
+        formats : mapping of column to ColumnFormat, int or callable, optional
+            Per-column overrides of the formatting inferred from the column names
+            (an int is a number of significant digits); see :func:`render_table`.
         """
         if not isinstance(df, pd.DataFrame):
             raise ParameterError(f"table {name!r}: expected a pandas DataFrame, got "
@@ -193,26 +379,38 @@ class Section:
             )
         if name in self.report.tables:
             raise ParameterError(f"table name {name!r} is used twice in the report")
+        try:
+            block = render_table(df, caption=caption, passed_column=passed_column,
+                                 csv_href=f"tables/{name}.csv", table_id=f"table-{name}",
+                                 formats=formats)
+        except ParameterError as err:
+            raise ParameterError(f"table {name!r}: {err}") from None
         self.report.tables[name] = df
         if passed_column is not None and passed_column in df.columns:
             self.report.verdicts.extend(bool(v) for v in df[passed_column])
-        else:
-            passed_column = None
-        self.blocks.append(
-            render_table(df, caption=caption, passed_column=passed_column,
-                         csv_href=f"tables/{name}.csv", table_id=f"table-{name}")
-        )
+        self.blocks.append(block)
         return self
 
-    def figure(self, figure: Any, caption: str = "", alt: str | None = None) -> Section:
-        """Add a figure (PNG bytes or a matplotlib Figure), embedded as base64."""
-        data = _png_bytes(figure)
+    def figure(self, figure: Any, caption: str = "", alt: str | None = None,
+               image_format: str = "auto") -> Section:
+        """Add a figure, embedded in the page (base64 data URI).
+
+        Parameters
+        ----------
+        figure : matplotlib Figure or bytes
+            A figure (rendered here) or PNG / SVG bytes.
+        caption, alt : str
+        image_format : {"auto", "svg", "png"}
+            For a matplotlib figure: ``"auto"`` renders both and keeps the smaller (vector
+            graphics for line plots, PNG for dense contour plots).
+        """
+        mime, data = _figure_bytes(figure, image_format)
         b64 = base64.b64encode(data).decode("ascii")
         alt_text = html.escape(alt if alt is not None else caption or self.title)
         self.report.n_figures += 1
         self.blocks.append(
             f'<figure><img class="report-figure" alt="{alt_text}" '
-            f'src="data:image/png;base64,{b64}">'
+            f'src="data:{mime};base64,{b64}">'
             f"<figcaption>Figure {self.report.n_figures}: {html.escape(caption)}"
             "</figcaption></figure>"
         )
@@ -247,6 +445,8 @@ class Report:
     unavailable: list[tuple[str, str]] = field(default_factory=list)
     n_figures: int = 0
     provenance: Provenance | None = None
+    summary_html: str = ""
+    summary_verdict: str = ""
 
     def section(self, title: str) -> Section:
         """Append and return a new section."""
@@ -255,21 +455,125 @@ class Report:
         return sec
 
     def add_provenance(self, provenance: Provenance) -> Section:
-        """Append the provenance section (versions, date, input hashes, parameters)."""
+        """Append the provenance section (versions, date, input hashes, parameters).
+
+        The parameters (e.g. the parsed study TOML) are shown as a key/value table
+        (:func:`mvtk.report.dict_table`) and written as ``tables/provenance_parameters.csv``.
+        """
         self.provenance = provenance
         sec = self.section("Provenance")
         sec.table(provenance.to_dataframe(), "provenance_versions", "Software and date",
                   passed_column=None)
         if len(provenance.inputs):
             sec.table(provenance.inputs, "provenance_inputs", "Input files (SHA-256)",
-                      passed_column=None)
+                      passed_column=None, formats={"bytes": str})
         else:
             sec.text("No input files.")
         if provenance.parameters:
-            sec.text("Parameters:")
-            sec.preformatted(json.dumps(provenance.parameters, indent=2, sort_keys=True,
-                                        default=str))
+            sec.table(dict_table(provenance.parameters), "provenance_parameters",
+                      "Parameters", passed_column=None)
         return sec
+
+    def executive_summary(
+        self,
+        checks: pd.DataFrame,
+        *,
+        validated: str,
+        against: str,
+        n_worst: int = 5,
+        passed_column: str = "passed",
+        error_column: str = "error_pct",
+        name_column: str = "check",
+        columns: list[str] | None = None,
+    ) -> Report:
+        """Put an executive summary at the top of the page.
+
+        The summary says what was validated and against what, gives the verdict of
+        ``checks`` (PASS only when every check passed; a report without checks has no
+        PASS) and lists the ``n_worst`` checks: failed ones first, then the passing
+        ones closest to their limit (largest share of the tolerance used, see
+        :func:`tolerance_used`), then by decreasing ``|error_column|``. Calling it again
+        replaces the summary. The checks are not added to the report's count; add the
+        full table with :meth:`Section.table`.
+
+        Parameters
+        ----------
+        checks : DataFrame
+            One row per check with a boolean ``passed_column`` (e.g.
+            :func:`mvtk.validation.check_table`).
+        validated : str
+            What was validated (e.g. ``"FE model of the smart beam, damping, SE and
+            controllers"``).
+        against : str
+            The references (e.g. ``"synthetic measurements and the paper's Tables 2-5"``).
+        n_worst : int
+            Number of worst checks listed (>= 1).
+        passed_column, error_column, name_column : str
+            Columns of ``checks``; ``error_column`` may be absent (then failed checks
+            are listed in table order).
+        columns : list of str, optional
+            Columns of the worst-checks table (default: name, value, reference, unit,
+            error_pct, tolerance, passed when present).
+        """
+        if not isinstance(checks, pd.DataFrame):
+            raise ParameterError(f"executive_summary expects the checks as a DataFrame, got "
+                                 f"{type(checks).__name__}")
+        if passed_column not in checks.columns:
+            raise ParameterError(
+                f"executive_summary: the checks table has no {passed_column!r} column; "
+                f"columns are {[str(c) for c in checks.columns]}")
+        if not isinstance(n_worst, int) or n_worst < 1:
+            raise ParameterError(f"executive_summary: n_worst must be an integer >= 1, got "
+                                 f"{n_worst!r}")
+        passed = checks[passed_column].astype(bool).to_numpy()
+        n, n_ok = len(checks), int(passed.sum())
+        used = tolerance_used(checks, error_column=error_column)
+        err = (pd.to_numeric(checks[error_column], errors="coerce").abs().to_numpy()
+               if error_column in checks.columns else np.full(n, np.nan))
+        order = pd.DataFrame({"failed": ~passed, "used": used, "err": err,
+                              "pos": np.arange(n)})
+        order = order.sort_values(["failed", "used", "err", "pos"],
+                                  ascending=[False, False, False, True], na_position="last")
+        worst = checks.iloc[order["pos"].to_numpy()[:n_worst]].reset_index(drop=True)
+        if np.isfinite(used).any():
+            worst.insert(len(worst.columns), "tolerance_used_pct",
+                         100.0 * used[order["pos"].to_numpy()[:n_worst]])
+        default = [name_column, "value", "reference", "unit", error_column, "tolerance",
+                   "tolerance_used_pct", passed_column]
+        cols = [c for c in (columns or default) if c in worst.columns]
+        missing = [c for c in (columns or []) if c not in checks.columns]
+        if missing:
+            raise ParameterError(f"executive_summary: columns {missing} are not in the "
+                                 "checks table")
+        ok = n > 0 and n_ok == n
+        if n == 0:
+            verdict = "NO VERDICT: no check could be evaluated"
+        elif ok:
+            verdict = f"PASS: all {n} checks passed"
+        else:
+            verdict = f"FAIL: {n - n_ok} of {n} checks failed"
+        parts = [
+            '<section class="executive" id="executive-summary"><h2>Executive summary</h2>',
+            f"<p><b>Validated:</b> {html.escape(validated)}<br>"
+            f"<b>Against:</b> {html.escape(against)}</p>",
+            f'<p class="verdict {"pass" if ok else "fail"}" id="summary-verdict">'
+            f"{html.escape(verdict)}</p>",
+        ]
+        if n:
+            title = (f"The {min(n_worst, n)} worst checks" if n > 1 else "The check")
+            parts.append(render_table(
+                worst[cols], caption=title, passed_column=passed_column,
+                table_id="table-summary-worst",
+                formats={"tolerance_used_pct": ColumnFormat(
+                    "percent", 3, "%", label="share of tolerance used")}
+                if "tolerance_used_pct" in cols else None))
+        if self.unavailable:
+            parts.append("<p>Some stages were not available (listed below); their checks "
+                         "are missing from this verdict.</p>")
+        parts.append("</section>")
+        self.summary_html = "\n".join(parts)
+        self.summary_verdict = verdict
+        return self
 
     @property
     def n_passed(self) -> int:
@@ -281,7 +585,11 @@ class Report:
 
     def to_html(self) -> str:
         """The whole page as a string."""
-        if self.n_checks:
+        if self.n_checks and self.summary_html:
+            # the executive summary carries the verdict; this line counts every table
+            summary = (f'<p id="verdict">Pass/fail cells in all tables of this report: '
+                       f"{self.n_passed} of {self.n_checks} checks passed</p>")
+        elif self.n_checks:
             ok = self.n_passed == self.n_checks
             summary = (
                 f'<p class="verdict {"pass" if ok else "fail"}" id="verdict">'
@@ -289,6 +597,7 @@ class Report:
             )
         else:
             summary = '<p class="verdict" id="verdict">No pass/fail checks in this report</p>'
+        summary = self.summary_html + summary
         if self.unavailable:
             items = "".join(
                 f"<li>{html.escape(t)}: {html.escape(r)}</li>" for t, r in self.unavailable
@@ -299,7 +608,7 @@ class Report:
         ) + "</ol></nav>"
         body = "\n".join(s.render() for s in self.sections)
         return _PAGE.substitute(title=html.escape(self.title), summary=summary, toc=toc,
-                                body=body)
+                                body=body, table_css=TABLE_CSS)
 
     def write(self, out_dir: str | Path) -> Path:
         """Write ``out_dir/index.html`` and ``out_dir/tables/<name>.csv``; return the page path."""
@@ -311,3 +620,15 @@ class Report:
         page = out / "index.html"
         page.write_text(self.to_html(), encoding="utf-8")
         return page
+
+    def to_pdf(self, out_dir: str | Path, *, chromium: str | None = None,
+               timeout: float = 180.0) -> Path:
+        """Write the HTML report (:meth:`write`) and print it to ``out_dir/report.pdf``.
+
+        Uses headless Chromium (see :func:`mvtk.report.to_pdf`); raises
+        :class:`~mvtk.errors.MissingDependencyError` when it is not installed.
+        """
+        from ._pdf import to_pdf
+
+        page = self.write(out_dir)
+        return to_pdf(page, chromium=chromium, timeout=timeout)

@@ -117,3 +117,75 @@ def inspect_page(chromium: str, page_path: Path, user_dir: Path):
             proc.kill()
 
 
+
+
+_LAYOUT_JS = r"""
+(() => {
+  const W = document.documentElement.clientWidth;
+  const box = e => { const r = e.getBoundingClientRect();
+                     return {left: r.left, right: r.right, width: r.width}; };
+  const wraps = Array.from(document.querySelectorAll('.mvtk-table-wrap')).map(w => ({
+    id: (w.querySelector('table') || {}).id || '', ...box(w),
+    scrollWidth: w.scrollWidth, clientWidth: w.clientWidth,
+    overflowX: getComputedStyle(w).overflowX}));
+  const tables = Array.from(document.querySelectorAll('table')).map(t => ({
+    id: t.id, ...box(t), wrapped: !!t.closest('.mvtk-table-wrap')}));
+  const figures = Array.from(document.querySelectorAll('figure')).map(f => {
+    const img = f.querySelector('img');
+    return {figure: box(f), img: box(img), natural: img.naturalWidth,
+            complete: img.complete};});
+  return {viewport: W, pageScrollWidth: document.documentElement.scrollWidth,
+          bodyRight: document.body.getBoundingClientRect().right,
+          wraps, tables, figures};
+})()
+"""
+
+
+def measure_layout(chromium: str, page_path: Path, user_dir: Path, widths=(1024, 1400),
+                   height: int = 900, print_media: bool = False,
+                   screenshot: Path | None = None) -> dict:
+    """Lay the page out at each width (DevTools device metrics) and measure its boxes.
+
+    Returns ``{width: layout}`` where ``layout`` holds the viewport width, the page's
+    scrollWidth, every table scroll box (bounding box, scrollWidth, clientWidth, CSS
+    overflow-x), every table and every figure/image box. With ``print_media`` the page is
+    laid out with its print CSS. ``screenshot`` saves a PNG of the first screen at the
+    last width.
+    """
+    import base64
+
+    proc = subprocess.Popen(
+        [chromium, *FLAGS, f"--user-data-dir={user_dir}", "--remote-debugging-port=0",
+         "about:blank"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+    out = {}
+    try:
+        port = _devtools_port(user_dir, proc)
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10) as r:
+            targets = json.load(r)
+        page = next(t for t in targets if t.get("type") == "page")
+        cdp = _Cdp(page["webSocketDebuggerUrl"])
+        cdp.call("Page.enable")
+        cdp.call("Runtime.enable")
+        if print_media:
+            cdp.call("Emulation.setEmulatedMedia", media="print")
+        for width in widths:
+            cdp.call("Emulation.setDeviceMetricsOverride", width=width, height=height,
+                     deviceScaleFactor=1, mobile=False)
+            cdp.events.clear()
+            cdp.call("Page.navigate", url=page_path.as_uri())
+            cdp.wait_event("Page.loadEventFired")
+            res = cdp.call("Runtime.evaluate", expression=_LAYOUT_JS, returnByValue=True)
+            out[width] = res["result"]["value"]
+        if screenshot is not None:
+            shot = cdp.call("Page.captureScreenshot", format="png")
+            screenshot.write_bytes(base64.b64decode(shot["data"]))
+        cdp.ws.close()
+        return out
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()
