@@ -169,6 +169,12 @@ def _run(args: argparse.Namespace) -> int:
     if res.report_path is not None and not args.json:
         print(f"report: {res.report_path} ({dt:.1f} s; cached stages: "
               f"{', '.join(res.cache_hits) or 'none'})")
+    if args.pdf and res.report_path is not None:
+        from .report import to_pdf
+
+        pdf = to_pdf(res.report_path)
+        if not args.json:
+            print(f"pdf: {pdf}")
     if res.failed:
         return 2
     return 1 if failed_checks else 0
@@ -188,4 +194,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true",
                    help="print the stage and check tables as JSON (schemas/run.schema.json)")
+    p.add_argument("--pdf", action="store_true",
+                   help="also print the report to DIR/report.pdf with headless Chromium "
+                   "(Debian package chromium)")
     p.set_defaults(func=_run)

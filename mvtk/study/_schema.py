@@ -249,6 +249,10 @@ _CHECK_DOC = {
                              "controller", 0.005, ""),
     "truth_param_rel": ("updated parameters vs the SYNTHETIC truth", 0.05, ""),
     "uncertainty_cov_rel": ("Monte-Carlo CoV(f1) vs its first-order estimate", 0.20, ""),
+    "mac_min": ("minimum MAC of each multi-point test mode with its paired updated-FE mode",
+                0.9, ""),
+    "prediction_fn_rel": ("updated-FE frequency of each multi-point test mode that was NOT an "
+                          "updating target vs the test (the model-form check)", 0.03, ""),
 }
 
 #: The whole study schema: section name -> Table.
