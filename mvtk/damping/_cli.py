@@ -173,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
         return 1
     except OSError as err:
         name = getattr(err, "filename", None) or args.file
-        sys.stderr.write(f"mvtk damping: cannot read {name}: {err.strerror or err}\n")
+        sys.stderr.write(f"mvtk damping: error: cannot read {name}: {err.strerror or err}\n")
         return 2
     for w in caught:
         sys.stderr.write(f"{w.category.__name__}: {w.message}\n")

@@ -353,6 +353,11 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         text = _model_form_text(res)
         if text:
             sec.text(text)
+        if up and "mac" in up.get("pairing", []):
+            macs = ", ".join(f"{m:.3f}" for m in up.get("mac", []))
+            sec.text("The updating paired each target with an FE mode by MAC against the "
+                     f"shape identified from the multi-point test (MAC {macs}), not by mode "
+                     "order: a mode swap during updating cannot pass unnoticed.")
     modes = pd.DataFrame({"mode": np.arange(1, len(fe["fn_hz"]) + 1),
                           "fn_hz nominal": fe["fn_hz"], "type": fe["mode_type"],
                           "mass fraction uz": fe["mass_fraction_uz"]})

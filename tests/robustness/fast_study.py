@@ -35,7 +35,8 @@ def write_fast_study(folder: Path, replace: dict[str, str] | None = None) -> Pat
         assert old in text, old
         text = text.replace(old, new)
     for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv"):
+                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
+                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
         text = text.replace(f'"{name}"', f'"{(STUDY.parent / name).as_posix()}"')
     path = folder / "study.toml"
     path.write_text(text, encoding="utf-8")

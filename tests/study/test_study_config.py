@@ -33,7 +33,8 @@ def _variant(tmp_path, old: str, new: str) -> Path:
     text = text.replace('"../structures/smart_beam.toml"',
                         f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
     for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv"):
+                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
+                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
         text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
     p = tmp_path / "study.toml"
     p.write_text(text)

@@ -24,7 +24,8 @@ def _absolute_copy(tmp_path: Path, text: str | None = None, encoding: str = "utf
     text = text.replace('"../structures/smart_beam.toml"',
                         f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
     for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv"):
+                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
+                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
         text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
     p = tmp_path / "study.toml"
     p.write_bytes(bom + text.encode(encoding))
@@ -86,7 +87,7 @@ def test_controller_key_typo_refused_before_any_stage(tmp_path):
 @pytest.mark.parametrize(("old", "new", "match"), [
     ("t_end_s = 6.0", "t_end_s = 0.5", r"control.t_end_s: expected a number > 1"),
     ("fs_out = 500.0", "fs_out = -5.0", r"control.fs_out: expected a number > 0"),
-    ("targets_hz = [13.26, 41.14]", "targets_hz = [41.14, 13.26]",
+    ("targets_hz = [13.26, 41.14, 78.69, 137.78]", "targets_hz = [41.14, 13.26]",
      r"updating.targets_hz: expected frequencies in ascending \(mode\) order"),
     ("fn_hz = [13.26, 41.14]", "fn_hz = [41.14, 13.26]",
      r"damping.fn_hz: expected frequencies in ascending"),
@@ -114,7 +115,7 @@ def test_types_ranges_and_cross_rules(tmp_path, old, new, match):
 def test_study_read_with_a_byte_order_mark(tmp_path, encoding, bom):
     """Issue 16: a UTF-16 study file gave a raw traceback."""
     s = load_study(_absolute_copy(tmp_path, encoding=encoding, bom=bom))
-    assert s.config["updating"]["targets_hz"] == [13.26, 41.14]
+    assert s.config["updating"]["targets_hz"] == [13.26, 41.14, 78.69, 137.78]
 
 
 def test_latin1_study_refused_naming_byte_offset_and_line(tmp_path):
