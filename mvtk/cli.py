@@ -35,6 +35,7 @@ from .errors import MvtkError
 #: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
 COMMAND_MODULES = (
     "mvtk._run_cli",
+    "mvtk._init_cli",
     "mvtk.io._cli",
     "mvtk.damping._cli",
     "mvtk.fe._cli",

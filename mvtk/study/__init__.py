@@ -8,9 +8,10 @@ under a key derived from what the stage read (verified on load; see docs/study.m
 """
 
 from ._config import Study, load_study
+from ._init import InitResult, init_study
 from ._report import study_checks
 from ._run import STAGES, StudyResult, run
 from ._schema import CONTROLLER_SCHEMAS, SCHEMA, Key, Table
 
 __all__ = ["Study", "StudyResult", "STAGES", "SCHEMA", "CONTROLLER_SCHEMAS", "Key", "Table",
-           "load_study", "run", "study_checks"]
+           "load_study", "run", "study_checks", "init_study", "InitResult"]

@@ -29,6 +29,9 @@ def _base() -> dict:
     d["structure"]["file"] = str(ROOT / "data" / "structures" / "smart_beam.toml")
     for m in d["measurements"].values():
         m["file"] = str(STUDY.parent / m["file"])
+    for key in ("file", "geometry"):
+        if key in d.get("modal", {}):
+            d["modal"][key] = str(STUDY.parent / d["modal"][key])
     d["references"] = {k: v for k, v in d["references"].items()
                        if not (isinstance(v, list) and any(x != x for x in v))}  # NaN
     return d

@@ -1,0 +1,39 @@
+"""``mvtk init DIR [--structure FILE] [--measurements FILE ...]``: a first study."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["add_parser"]
+
+
+def _init(args: argparse.Namespace) -> int:
+    from .study._init import init_study
+
+    res = init_study(args.folder, structure=args.structure, measurements=args.measurements,
+                     name=args.name, overwrite=args.force)
+    print(f"wrote {res.study}")
+    if args.structure is None:
+        print(f"wrote {res.structure} (a placeholder plate: edit it to your structure)")
+    for t in res.tests:
+        what = t["kind"] if t["kind"] != "skipped" else f"skipped: {t['why']}"
+        print(f"  {t['file']}: {what}")
+    print(f"next: {res.next_command}")
+    return 0
+
+
+def add_parser(subparsers) -> None:
+    """Register ``mvtk init``."""
+    p = subparsers.add_parser(
+        "init", help="write a first study TOML (and structure TOML) from your files",
+        description="Read the measurement files, recognise the tests they hold (hammer "
+        "test, free decay, multi-point FRF set) and write DIR/study.toml with the channels, "
+        "record lengths and resonances found, plus DIR/structure.toml (a placeholder) when "
+        "no --structure is given. The study is validated before the command returns.")
+    p.add_argument("folder", help="folder to write study.toml (and structure.toml) into")
+    p.add_argument("--structure", default=None, help="your structure TOML (referenced)")
+    p.add_argument("--measurements", nargs="*", default=[], metavar="FILE",
+                   help="measurement files (any format of mvtk read)")
+    p.add_argument("--name", default=None, help="study name (default: the folder name)")
+    p.add_argument("--force", action="store_true", help="overwrite existing files")
+    p.set_defaults(func=_init)

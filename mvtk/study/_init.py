@@ -1,0 +1,274 @@
+"""``mvtk init``: a first study (and structure) TOML from the user's own files.
+
+:func:`init_study` reads each measurement file with :func:`mvtk.io.read`, decides what
+test it is from what it holds, and writes a commented ``study.toml`` whose every value
+comes from the files (channel names, record length, the resonances the default damping
+estimator finds) or is a stated placeholder to edit. The written file is validated with
+:func:`mvtk.study.load_study` before the command reports success, so what ``init``
+writes is always accepted by ``mvtk run``.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ConfigError, MvtkError
+
+__all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE"]
+
+#: Structure file written when the user gives none: a clamped steel plate to edit.
+STRUCTURE_TEMPLATE = '''\
+# Structure description (mvtk.fe.build_model; reference: docs, "Structure TOML").
+# A PLACEHOLDER written by `mvtk init`: replace the geometry, materials, layers, mesh and
+# boundary conditions with those of your structure (SI units: m, Pa, kg/m^3), then check
+# it with `mvtk modes structure.toml -n 6`.
+name = "my structure (edit me)"
+
+[materials.steel]
+E = 210e9
+nu = 0.30
+rho = 7850
+
+[structure]
+type = "plate"            # "plate" (MITC4 shells), "beam", or "mesh" (Gmsh/Abaqus/Nastran file)
+length = 0.30             # along x (m)
+width = 0.20              # along y (m)
+
+[[structure.layers]]
+material = "steel"
+thickness = 1.0e-3
+
+[mesh]
+element_size = 0.01       # m
+
+[boundary]
+clamp = "x0"              # clamped edge (x0, x1, y0, y1)
+'''
+
+
+@dataclass(frozen=True)
+class InitResult:
+    """What ``mvtk init`` wrote and found.
+
+    Attributes
+    ----------
+    study : Path
+        The study TOML written.
+    structure : Path
+        The structure TOML the study uses (written from the template or given).
+    tests : list of dict
+        One entry per measurement file: ``file``, ``kind`` (``impact``, ``decay``,
+        ``modal`` or ``skipped``), what was found and why.
+    next_command : str
+        The command to run next.
+    """
+
+    study: Path
+    structure: Path
+    tests: list = field(default_factory=list)
+    next_command: str = ""
+
+
+def _rel(path: Path, start: Path) -> str:
+    return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
+
+
+def _classify(path: Path) -> dict:
+    """What test a file holds: an impact test, a free decay, or a multi-point FRF set."""
+    import mvtk.damping
+    import mvtk.io
+    import mvtk.signal
+
+    try:
+        ds = mvtk.io.read(path)
+    except MvtkError as err:
+        return {"file": path, "kind": "skipped", "why": f"not readable: {err}"}
+    if "frf" in ds and "time_history" not in ds:
+        frf = ds["frf"]
+        if frf.sizes.get("response", 1) > 1:
+            f = frf["frequency"].values
+            return {"file": path, "kind": "modal", "fmin": float(max(f[1], 0.02 * f[-1])),
+                    "fmax": float(0.95 * f[-1]), "n_responses": int(frf.sizes["response"])}
+        return {"file": path, "kind": "skipped",
+                "why": "a single FRF: use `mvtk damping` on it (a study needs time histories "
+                       "or a multi-point FRF set)"}
+    if "time_history" not in ds:
+        return {"file": path, "kind": "skipped", "why": "no time history or FRF matrix found"}
+    th = ds["time_history"]
+    names = [str(c) for c in th["channel"].values]
+    qty = [str(q) for q in th["quantity"].values] if "quantity" in th.coords else []
+    forces = [n for n, q in zip(names, qty) if q == "force"]
+    others = [n for n, q in zip(names, qty) if q != "force"]
+    if forces and others:
+        sel = th.sel(channel=[forces[0], others[0]])
+        res = mvtk.signal.frf(sel, reference=forces[0], response=others[0])
+        out = {"file": path, "kind": "impact", "reference": forces[0], "response": others[0]}
+        if res.attrs.get("excitation") != "impact":
+            out.update(kind="skipped", why=f"force channel {forces[0]!r} is not a hammer "
+                       "test (random or swept excitation): run `mvtk damping` on it")
+            return out
+        res_hz = float(res.attrs.get("resolution_hz", np.nan))
+        fs = 1.0 / float(th["time"].values[1] - th["time"].values[0])
+        out["record_s"] = float(1.0 / res_hz) if np.isfinite(res_hz) and res_hz > 0 else float(
+            th.sizes["time"] / fs)
+        try:
+            hp = mvtk.damping.half_power(res["frf"])
+            tab = hp.to_dataframe()
+            keep = tab[tab["reliable"]] if "reliable" in tab and tab["reliable"].any() else tab
+            out["fn_hz"] = sorted(float(f) for f in keep["fn_hz"] if np.isfinite(f))
+        except MvtkError as err:
+            out["fn_hz"] = []
+            out["why"] = f"no resonance found by the default estimator ({err})"
+        return out
+    if others:
+        return {"file": path, "kind": "decay", "channel": others[0]}
+    return {"file": path, "kind": "skipped", "why": "only force channels"}
+
+
+def _fmt_list(values) -> str:
+    return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
+
+
+def init_study(folder: str | Path, *, structure: str | Path | None = None,
+               measurements=(), name: str | None = None, overwrite: bool = False
+               ) -> InitResult:
+    """Write ``folder/study.toml`` (and ``folder/structure.toml`` without ``structure``).
+
+    Parameters
+    ----------
+    folder : path
+        Output folder (created); existing files are refused unless ``overwrite``.
+    structure : path, optional
+        The user's structure TOML (referenced, not copied). Default: a commented
+        placeholder plate written to ``folder/structure.toml``.
+    measurements : sequence of path
+        Measurement files: the first impact test becomes ``[measurements.impact]`` (its
+        resonances ``[damping] fn_hz`` and ``[updating] targets_hz``), a free decay
+        ``[measurements.decay]``, a multi-point FRF set (UFF 58 with node numbers)
+        ``[modal]``. Files that fit none are listed in the result with the reason.
+    name : str, optional
+        Study name (default: the folder name).
+    overwrite : bool
+
+    Returns
+    -------
+    InitResult
+
+    Raises
+    ------
+    ConfigError
+        A file to write exists (without ``overwrite``), a given file is missing, or the
+        written study does not validate (the message says why).
+    """
+    from ._config import load_study
+
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise ConfigError(f"mvtk init: {str(folder)!r} is a file, expected a folder")
+    folder.mkdir(parents=True, exist_ok=True)
+    study_path = folder / "study.toml"
+    targets = [study_path] + ([] if structure is not None else [folder / "structure.toml"])
+    for t in targets:
+        if t.exists() and not overwrite:
+            raise ConfigError(f"mvtk init: {str(t)!r} exists; use --force to overwrite it")
+    for m in measurements:
+        if not Path(m).is_file():
+            raise ConfigError(f"mvtk init: measurement file {str(m)!r} not found")
+    if structure is not None:
+        s_path = Path(structure)
+        if not s_path.is_file():
+            raise ConfigError(f"mvtk init: structure file {str(s_path)!r} not found")
+    else:
+        s_path = folder / "structure.toml"
+        s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
+
+    tests = [_classify(Path(m)) for m in measurements]
+    impact = next((t for t in tests if t["kind"] == "impact"), None)
+    decay = next((t for t in tests if t["kind"] == "decay"), None)
+    modal = next((t for t in tests if t["kind"] == "modal"), None)
+    for t in tests:
+        if t["kind"] != "skipped" and t is not impact and t is not decay and t is not modal:
+            t.update(kind="skipped", why=f"a second {t['kind']} test: add it by hand")
+
+    lines = [
+        f"# Validation study written by `mvtk init` from {len(tests)} measurement file(s).",
+        "# Every value below was read from your files or is marked EDIT. Reference of every",
+        "# section and key: the docs' 'Study file reference'. Paths are relative to this file.",
+        "",
+        "[study]",
+        f'name = "{name or folder.resolve().name}"',
+        "",
+        "[structure]",
+        f'file = "{_rel(s_path, folder)}"'
+        + ("   # EDIT: a placeholder plate" if structure is None else ""),
+        "",
+        "[fe]",
+        "n_modes = 6",
+        "",
+    ]
+    if impact or decay:
+        lines.append("[measurements]")
+        lines.append("")
+    if impact:
+        lines += [
+            "[measurements.impact]   # hammer test found by its force channel",
+            f'file = "{_rel(impact["file"], folder)}"',
+            f'reference = "{impact["reference"]}"',
+            f'response = "{impact["response"]}"',
+            f"record_s = {impact['record_s']:.6g}   # one record per hit (from the data)",
+            "",
+        ]
+    if decay:
+        lines += [
+            "[measurements.decay]    # free decay (no force channel)",
+            f'file = "{_rel(decay["file"], folder)}"',
+            f'channel = "{decay["channel"]}"',
+            "",
+        ]
+    fn = (impact or {}).get("fn_hz") or []
+    if impact and fn:
+        lines += [
+            "[damping]",
+            f"fn_hz = {_fmt_list(fn)}   # resonances the default half-power estimator "
+            "found reliable",
+            "",
+            "[updating]",
+            f"targets_hz = {_fmt_list(fn)}   # EDIT: keep the modes the model should match",
+            "",
+            "[[updating.parameters]]   # EDIT: the uncertain parameters of your model",
+            f'path = "materials.{_first_material(s_path)}.E"',
+            "",
+        ]
+    if modal:
+        lines += [
+            "[modal]                 # multi-point FRF set (mvtk.modal)",
+            f'file = "{_rel(modal["file"], folder)}"',
+            f"fmin_hz = {modal['fmin']:.6g}",
+            f"fmax_hz = {modal['fmax']:.6g}",
+            "# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m) unless the file has "
+            "UFF 15 nodes",
+            "",
+        ]
+    study_path.write_text("\n".join(lines), encoding="utf-8")
+    try:
+        load_study(study_path)
+    except ConfigError as err:
+        raise ConfigError(f"mvtk init wrote {study_path} but it does not validate: {err}. "
+                          "Edit it (or the structure file) and run `mvtk run` again.") from err
+    out_dir = folder / "report"
+    return InitResult(study_path, s_path, tests,
+                      f"mvtk run {study_path.as_posix()} --out {out_dir.as_posix()}")
+
+
+def _first_material(structure: Path) -> str:
+    from ..fe import load_structure
+
+    try:
+        mats = load_structure(structure).get("materials") or {}
+    except MvtkError:
+        return "steel"
+    return next(iter(mats), "steel")
