@@ -156,6 +156,8 @@ def test_view0_sweep_cli_reader_options_only(shared_data, capsys):
     code, rows, _ = _cli_json(argv, capsys)
     assert code == 1 and rows and len(rows) <= S.MAX_PEAKS
     assert all(not r["reliable"] and r["reason"] for r in rows)
+    # a failed row names the peak it is about (its fn_hz is NaN)
+    assert all(" Hz" in r["reason"] for r in rows if r["quality"] == "failed")
     fns = [r["fn_hz"] for r in rows if r["fn_hz"] is not None]
     assert min(fns) > 55 and max(fns) < 470  # inside the swept band
     r127 = min(rows, key=lambda r: abs((r["fn_hz"] or 0) - 126.5))
