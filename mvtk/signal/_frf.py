@@ -615,7 +615,7 @@ def _sweep_band(force, fs: float, n_blocks: int = 16):
         return None
     blocks = x[:m * n_blocks].reshape(n_blocks, m)
     blocks = blocks - blocks.mean(axis=1, keepdims=True)
-    nfft = 8 * m  # zero padding: peak frequency to 1/8 of a line
+    nfft = max(m, min(8 * m, 2**16))  # zero padding of short blocks: finer peak frequency
     p = np.abs(np.fft.rfft(blocks * np.hanning(m), n=nfft, axis=1)) ** 2
     p[:, 0] = 0.0
     f = np.fft.rfftfreq(nfft, 1 / fs)
@@ -630,7 +630,7 @@ def _sweep_band(force, fs: float, n_blocks: int = 16):
         conc.append(p[i, max(k[i] - w, 1):k[i] + w + 1].sum() / total[i])
     fk = f[k[live]]
     steps = np.diff(fk)
-    moving = steps[np.abs(steps) > fs / m / 8]
+    moving = steps[np.abs(steps) > fs / nfft]
     if moving.size == 0 or not np.median(conc) > 0.5:
         return None
     up = np.count_nonzero(moving > 0)
