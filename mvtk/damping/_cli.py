@@ -63,8 +63,9 @@ def add_parser(subparsers) -> None:
     frf = p.add_argument_group("FRF from time histories")
     frf.add_argument("--reference", default=None,
                      help="reference channel (default: channels with quantity force)")
-    frf.add_argument("--excitation", choices=("auto", "random", "impact"), default="auto",
-                     help="default auto: impact if the reference is a pulse")
+    frf.add_argument("--excitation", choices=("auto", "random", "impact", "sweep"),
+                     default="auto", help="default auto: impact if the reference is a pulse, "
+                     "sweep if it is a moving narrow-band signal, random otherwise")
     frf.add_argument("--impact", action="store_true", help="same as --excitation impact")
     frf.add_argument("--nperseg", type=int, default=None,
                      help="FRF segment/record length (default: chosen from the data)")
@@ -94,6 +95,9 @@ def _has_reference(ds, args) -> bool:
     return "quantity" in th.coords and "force" in [str(q) for q in th["quantity"].values]
 
 
+_MOTION = ("displacement", "velocity", "acceleration")
+
+
 def _half_power_input(ds, args, notes):
     from .. import signal
 
@@ -102,9 +106,20 @@ def _half_power_input(ds, args, notes):
         ref = args.reference if args.reference is not None else {"quantity": "force"}
         excitation = "impact" if args.impact else args.excitation
         resp = args.channel
+        th = ds["time_history"]
+        if resp is None and "quantity" in th.coords:
+            # a trigger or monitoring voltage is not a response: motion channels only
+            motion = [str(c) for c, q in zip(th["channel"].values, th["quantity"].values)
+                      if str(q) in _MOTION and str(c) != args.reference]
+            if motion and len(motion) < th.sizes["channel"] - 1:
+                resp = motion
+                notes.append(f"responses: the motion channels {motion}")
         fr = signal.frf(ds, ref, response=resp, excitation=excitation, nperseg=args.nperseg)
         notes.append(f"FRF: H1, {fr.attrs['excitation']} excitation, "
-                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}")
+                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}"
+                     + ("; peaks searched in the excited band {:.5g}..{:.5g} Hz".format(
+                         *fr.attrs["excitation_band_hz"])
+                        if fr.attrs.get("excitation") == "sweep" else ""))
         return fr
     if args.channel is not None:
         for name in ("frf", "psd", "auto_spectrum", "spectrum"):

@@ -478,9 +478,11 @@ def half_power(
                 quality = "failed"
                 reason = f"no peak within +-{search} lines of {ft:.5g} Hz"
             elif quality == "overlap":
-                reason = "the amplitude rises again before the -3 dB point: neighbouring mode"
+                reason = (f"the amplitude rises again before the -3 dB point of the peak "
+                          f"near {ft:.5g} Hz: neighbouring mode")
             else:
-                reason = "the -3 dB points were not found on both sides of the peak"
+                reason = (f"the -3 dB points were not found on both sides of the peak "
+                          f"near {ft:.5g} Hz")
             pk_hz = np.sqrt(res["upk"]) / (2 * np.pi) if res else np.nan
             rows["curve"].append(label)
             rows["mode"].append(m if fn_hz is not None else n_rows)

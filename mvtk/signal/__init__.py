@@ -5,7 +5,7 @@ FRFs with coherence for random and impact excitation, ``find_peaks`` picks modes
 """
 
 from ._curves import AmplitudeCurves, amplitude_curves
-from ._frf import auto_segment, exponential_window_correction, frf, frf_kind, is_impulsive
+from ._frf import auto_segment, exponential_window_correction, frf, frf_kind, is_impulsive, is_sweep
 from ._input import as_time_history, sampling_rate
 from ._peaks import MAX_PEAKS, PeakResult, find_peaks, noise_jitter_db
 from ._spectral import csd, psd
@@ -23,6 +23,7 @@ __all__ = [
     "frf",
     "frf_kind",
     "is_impulsive",
+    "is_sweep",
     "noise_jitter_db",
     "psd",
     "sampling_rate",

@@ -148,6 +148,7 @@ def find_peaks(
         Frequency band in Hz searched for peaks. Default ``fmax`` for an impact FRF from
         :func:`mvtk.signal.frf`: the top of its ``excitation_band_hz`` (the force
         spectrum has dropped by 20 dB there; above it the FRF is noise over no input).
+        For a swept-sine FRF the band also sets the default ``fmin`` (its bottom).
         Default ``fmin`` when the input states ``resolution_hz`` (FRFs from
         :func:`mvtk.signal.frf`): 5 x that resolution (a mode needs 5 cycles in the
         record; below it drift and offsets make peaks).
@@ -183,6 +184,8 @@ def find_peaks(
         fmax = float(band[1])
     if fmin is None and curves.attrs.get("resolution_hz"):
         fmin = 5.0 * float(curves.attrs["resolution_hz"])
+    if band is not None and len(band) == 2 and float(band[0]) > 0:
+        fmin = float(band[0]) if fmin is None else max(fmin, float(band[0]))
     finite = np.isfinite(amp)
     if not finite.any():
         raise FormatError("find_peaks: the spectrum holds no finite value")

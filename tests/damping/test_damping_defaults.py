@@ -50,37 +50,31 @@ def _write_csv(path, x, quantity, units):
     return path
 
 
-def _read_lvm(path):
-    """LVM (comma decimal separator) read with numpy; the io reader is not needed here."""
-    lines = path.read_text().splitlines()
-    i = next(k for k, line in enumerate(lines) if line.startswith("X_Value"))
-    rows = [line.split("\t")[1:3] for line in lines[i + 1:] if line.strip()]
-    data = np.array([[float(v.replace(",", ".")) for v in r] for r in rows]).T
-    return T.make_time_history(data, 50000.0, quantity=["acceleration", "force"],
-                               units=["g", "N"], names=["acc", "force"])
+ACC = "Acceleration (Trigger)"  # channel names of the LVM files (Y header)
 
 
 # ----------------------------------------------------------------- real files
 @pytest.fixture(scope="module")
-def lvm_csv(tmp_path_factory, shared_data):
+def lvm_files(shared_data):
+    """The two LVM records read by mvtk.io (time history, path of the .lvm itself)."""
+    from mvtk import io
+
     out = {}
     for name in ("acceleration", "camera"):
         src = shared_data / "lvm" / f"{name}.lvm"
         if not src.is_file():
             pytest.skip(f"{src} not found")
-        x = _read_lvm(src)
-        out[name] = (x, _write_csv(tmp_path_factory.mktemp("lvm") / f"{name}.csv", x,
-                                   ["acceleration", "force"], ["g", "N"]))
+        out[name] = (io.read(src)["time_history"], src)
     return out
 
 
 @pytest.mark.slow
 @pytest.mark.shared_data
 @pytest.mark.parametrize("name", ["acceleration", "camera"])
-def test_lvm_impact_cli_no_options_matches_expert(lvm_csv, name, capsys):
+def test_lvm_impact_cli_no_options_matches_expert(lvm_files, name, capsys):
     # ladisk beam, one hammer hit, 1 s at 50 kHz. Old default (256-sample segments,
     # 195 Hz lines) gave zeta 0.164 / 0.062 / 0.021 (36x, 20x, 10x too high).
-    x, csv = lvm_csv[name]
+    x, csv = lvm_files[name]
     code, rows, _ = _cli_json([str(csv)], capsys)
     assert code == 0
     assert len(rows) <= S.MAX_PEAKS
@@ -91,19 +85,20 @@ def test_lvm_impact_cli_no_options_matches_expert(lvm_csv, name, capsys):
         assert r["reliable"], r
         # expert: envelope of the decay band-passed +-10 % around the mode (time domain,
         # independent of the FRF), the setting of ../shared/data/PROVENANCE.md
-        e = D.envelope_fit(x, fn, channel="acc", band_hz=(0.9 * fn, 1.1 * fn), order=4)
+        e = D.envelope_fit(x, fn, channel=ACC, band_hz=(0.9 * fn, 1.1 * fn), order=4)
         assert r["zeta"] == pytest.approx(e.zeta[0], rel=tol)
         assert r["fn_hz"] == pytest.approx(e.fn_hz[0], rel=1e-3)
 
 
 @pytest.mark.slow
 @pytest.mark.shared_data
-def test_lvm_half_power_agrees_with_sdypy_lscf(lvm_csv):
+def test_lvm_half_power_agrees_with_sdypy_lscf(lvm_files):
     ema = pytest.importorskip("sdypy.EMA", reason="peer sdypy-EMA not installed")
-    x, _ = lvm_csv["acceleration"]
-    d = S.frf(x, "force", nfft=None)  # the measured lines, no zero padding, for LSCF
+    x, _ = lvm_files["acceleration"]
+    force = {"quantity": "force"}
+    d = S.frf(x, force, nfft=None)  # the measured lines, no zero padding, for LSCF
     f, h = d["frequency"].values, d["frf"].values[0, 0]
-    hp = D.half_power(S.frf(x, "force"), fn_hz=[695.7, 1898.1])
+    hp = D.half_power(S.frf(x, force), fn_hz=[695.7, 1898.1])
     for k, (lo, hi, fn) in enumerate([(600, 800, 695.7), (1800, 2000, 1898.1)]):
         sel = (f >= lo) & (f <= hi)
         with warnings.catch_warnings():
@@ -118,14 +113,14 @@ def test_lvm_half_power_agrees_with_sdypy_lscf(lvm_csv):
 
 @pytest.mark.slow
 @pytest.mark.shared_data
-def test_lvm_decay_cli_with_dc_offset(lvm_csv, capsys):
+def test_lvm_decay_cli_with_dc_offset(lvm_files, capsys):
     # the accelerometer has a drifting DC offset (PROVENANCE.md): the old decay default
     # found 0.008 Hz; now the dominant 695.8 Hz mode comes out like the expert band-pass
-    x, csv = lvm_csv["acceleration"]
+    x, csv = lvm_files["acceleration"]
     code, rows, _ = _cli_json([str(csv), "--method", "envelope"], capsys)
     assert code == 0
-    assert [r["channel"] for r in rows] == ["acc"]  # the hammer is not a decay
-    e = D.envelope_fit(x, 695.8, channel="acc", band_hz=(626.0, 765.0), order=4)
+    assert [r["channel"] for r in rows] == [ACC]  # the hammer is not a decay
+    e = D.envelope_fit(x, 695.8, channel=ACC, band_hz=(626.0, 765.0), order=4)
     assert rows[0]["fn_hz"] == pytest.approx(695.8, rel=1e-3)
     assert rows[0]["zeta"] == pytest.approx(e.zeta[0], rel=0.05)
     assert rows[0]["reliable"]
@@ -265,10 +260,8 @@ def test_generated_current_as_reference(rng, tmp_path, capsys):
         k = int(np.nanargmin(np.abs(r.fn_hz - fn)))
         assert r.reliable[k] and r.zeta[k] == pytest.approx(z, rel=0.05)
     csv = _write_csv(tmp_path / "current.csv", x, ["current", "acceleration"], ["A", "m/s^2"])
-    try:
-        code, rows, _ = _cli_json([str(csv), "--reference", "force"], capsys)
-    except FormatError as err:  # the text reader of this branch refuses 'current'
-        pytest.skip(f"reader does not accept quantity 'current' yet: {err}")
+    # the reader accepts quantity 'current' (it used to refuse it and this part skipped)
+    code, rows, _ = _cli_json([str(csv), "--reference", "force"], capsys)
     assert code == 0
     for fn, z in ((20.0, 0.01), (55.0, 0.005)):
         r = _row(rows, fn)

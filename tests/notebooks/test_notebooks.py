@@ -65,5 +65,13 @@ def test_notebook_runs(path):
         if (shared / "lvm" / "camera.lvm").is_file():
             # issue 19: the two hits' identified frequencies agree within 0.1 %
             assert "agree within 0.1 %: True" in text and "NOT FOUND" not in text
+            # the defaults path, no fallback: FRF and half_power with no options, only
+            # physical peaks listed (not the 18-40 noise rows of before), accelerances
+            assert "FRF with the defaults" in text and "default impact FRF failed" not in text
+            import re
+
+            rows = [int(n) for n in re.findall(r"with no options gives (\d+) rows", text)]
+            assert len(rows) == 2 and max(rows) <= 12, rows
+            assert "FRF type {'accelerance'}" in text
         else:
             assert "NOT FOUND" in text
