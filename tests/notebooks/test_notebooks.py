@@ -73,5 +73,10 @@ def test_notebook_runs(path):
             rows = [int(n) for n in re.findall(r"with no options gives (\d+) rows", text)]
             assert len(rows) == 2 and max(rows) <= 12, rows
             assert "FRF type {'accelerance'}" in text
+            # pLSCF on the same default FRFs: the bending modes of both hits repeat
+            import re as _re
+
+            diffs = [abs(float(d)) for d in _re.findall(r"\(([+-]\d+\.\d+) %\)", text)]
+            assert "pLSCF + LSFD" in text and len(diffs) >= 4 and max(diffs) < 0.1, diffs
         else:
             assert "NOT FOUND" in text
