@@ -227,14 +227,18 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     syn_v = synthesise(fit, f)
     syn = h.copy(data=syn_v)
     syn.name = "frf_synthesised"
-    Hm = h.values
-    num = np.abs(np.sum(Hm * np.conj(syn_v), axis=(1, 2))) ** 2
-    den = np.sum(np.abs(Hm) ** 2, axis=(1, 2)) * np.sum(np.abs(syn_v) ** 2, axis=(1, 2))
+    # lines where either FRF is not finite (the residual terms of a band that starts at
+    # 0 Hz are infinite there) take no part in the correlation
+    ok = np.isfinite(h.values) & np.isfinite(syn_v)
+    Hm = np.where(ok, h.values, 0.0)
+    Sv = np.where(ok, syn_v, 0.0)
+    num = np.abs(np.sum(Hm * np.conj(Sv), axis=(1, 2))) ** 2
+    den = np.sum(np.abs(Hm) ** 2, axis=(1, 2)) * np.sum(np.abs(Sv) ** 2, axis=(1, 2))
     corr = xr.DataArray(np.where(den > 0, num / np.where(den > 0, den, 1), 0.0),
                         dims=("response",), coords={"response": h["response"].values},
                         name="correlation")
-    tot_num = np.abs(np.sum(Hm * np.conj(syn_v))) ** 2
-    tot_den = np.sum(np.abs(Hm) ** 2) * np.sum(np.abs(syn_v) ** 2)
+    tot_num = np.abs(np.sum(Hm * np.conj(Sv))) ** 2
+    tot_den = np.sum(np.abs(Hm) ** 2) * np.sum(np.abs(Sv) ** 2)
     corr.attrs["overall"] = float(tot_num / tot_den) if tot_den > 0 else 0.0
     mpc_v = mpc(cplx) if no > 1 else np.ones(nm)
     mpd_v = mpd(cplx) if no > 1 else np.zeros(nm)
