@@ -85,6 +85,12 @@ class ComparisonResult:
 
         return pd.DataFrame(list(self.rows)).set_index("controller")
 
+    def _repr_html_(self) -> str:
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption="Controller comparison",
+                          passed_column=None)
+
     def to_dict(self) -> dict:
         """JSON-friendly rows (inf/NaN as None)."""
         def clean(v):

@@ -132,7 +132,9 @@ class DofMapping:
         return self.report
 
     def _repr_html_(self) -> str:
-        return self.report.to_html(index=False)
+        from ..report import html_table
+
+        return html_table(self.report, caption=type(self).__name__, passed_column=None)
 
     def observe(self, vectors: np.ndarray) -> np.ndarray:
         """Sensor readings ``C @ vectors`` of FE vectors ``(n_fe_dof, k)``."""

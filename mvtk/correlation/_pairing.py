@@ -42,7 +42,9 @@ class ModePairing:
         return self.table
 
     def _repr_html_(self) -> str:
-        return self.table.to_html(index=False)
+        from ..report import html_table
+
+        return html_table(self.table, caption=type(self).__name__, passed_column=None)
 
     @property
     def pairs(self) -> list[tuple[int, int]]:

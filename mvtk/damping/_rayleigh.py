@@ -73,7 +73,9 @@ class RayleighFit:
         return rayleigh_zeta(f, self.alpha, self.beta)
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per input mode with the fit; alpha and beta in ``attrs``."""

@@ -93,7 +93,9 @@ class ModalResult:
         })
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe().to_html(index=False)
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
 
 #: Names of the strain-energy parts of :func:`energy_split`, in column order.

@@ -159,7 +159,9 @@ class SuperElement:
         return self.T @ q
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self):
         """Table of reduced coordinates: label, kind, node, component, fn_hz."""

@@ -107,7 +107,9 @@ class ModeComparison:
         return np.max(self.mac_matrix, axis=1)
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self):
         """Columns mode, fe_hz, se_hz, error_pct, error_pct_of_se, mac, se_match,
@@ -199,7 +201,9 @@ class StaticCheck:
         return float(both.max()) if both.size else 0.0
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self):
         """Columns load, rel_error_boundary, rel_error_full."""
@@ -281,7 +285,9 @@ class SizeTable:
     se_dof_6_per_node: int
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self):
         """Rows nodes, elements, DOF (free), DOF (6 per node); columns FE model, SE model."""
@@ -323,7 +329,9 @@ class Verification:
     static: StaticCheck
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self):
         """The mode comparison table (the headline table; see the attributes for others)."""

@@ -46,7 +46,9 @@ class PeakResult:
         return int(self.fn_hz.size)
 
     def _repr_html_(self) -> str:
-        return self.to_dataframe()._repr_html_()
+        from ..report import html_table
+
+        return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per peak: ``fn_hz``, ``index``, ``amplitude``, ``prominence_db``."""

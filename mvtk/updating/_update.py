@@ -741,7 +741,11 @@ class UpdateResult:
         return tables[table]()
 
     def _repr_html_(self) -> str:
-        return self.residual_table()._repr_html_() + self.parameter_table()._repr_html_()
+        from ..report import html_table
+
+        return (html_table(self.residual_table(), caption="Residuals", passed_column=None)
+                + html_table(self.parameter_table(), caption="Parameters",
+                             passed_column=None))
 
     # ----------------------------------------------------------------- output
     def to_toml(self) -> str:

@@ -121,4 +121,4 @@ def test_errors():
 def test_results_render_html():
     r = rayleigh_fit([13.26, 41.14], [5.84e-4, 1.32e-3])
     html = r._repr_html_()
-    assert "<table" in html and "zeta_fit" in html
+    assert "<table" in html and "zeta" in html and "fit" in html
