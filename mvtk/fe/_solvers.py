@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import warnings
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -291,7 +292,8 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
         matrix reordered by :func:`fill_reducing_ordering`. ``"cholmod"``: CHOLMOD
         supernodal Cholesky (``pip install "mvtk[cholmod]"``; GPL component), positive
         definite matrices only. ``"auto"``: CHOLMOD when installed and the matrix is
-        positive definite, SuperLU otherwise.
+        positive definite, SuperLU otherwise. The environment variable
+        ``MVTK_SPARSE_BACKEND`` (one of these names) overrides ``"auto"``.
     ordering : {"auto", "metis", "mmd"}
         Ordering for SuperLU (see :func:`fill_reducing_ordering`); CHOLMOD orders itself.
 
@@ -310,6 +312,13 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
     """
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if backend == "auto":
+        env = os.environ.get("MVTK_SPARSE_BACKEND", "auto")
+        if env not in BACKENDS:
+            raise ParameterError(
+                f"environment variable MVTK_SPARSE_BACKEND must be one of {BACKENDS}, "
+                f"got {env!r}")
+        backend = env
     A = sp.csc_matrix(A)
     if A.shape[0] != A.shape[1]:
         raise DimensionError(f"matrix must be square, got {A.shape}")
@@ -379,7 +388,9 @@ def _default_shift(K, M, singular_shift=None, backend="auto") -> tuple[float, Fa
             return 0.0, lu
     except ParameterError:
         pass
-    if singular_shift is not None:
+    if callable(singular_shift):
+        singular_shift = singular_shift()
+    if singular_shift is not None and np.isfinite(singular_shift):
         return float(singular_shift), None
     mdiag = M.diagonal()
     ratio = K.diagonal()[mdiag > 0] / mdiag[mdiag > 0]
@@ -482,9 +493,10 @@ def eigsh_lowest(
         the error is quadratic in the residual, far smaller). Default
         :data:`DEFAULT_TOL` = 1e-10 (frequencies to better than 1e-10); 0 = machine
         precision (a few more solves).
-    singular_shift : float, optional
+    singular_shift : float or callable, optional
         Shift to use instead of the default one when K turns out singular (a caller that
-        knows the scale of the first elastic mode, e.g. from a trial field, passes it).
+        knows the scale of the first elastic mode, e.g. from a trial field, passes it),
+        or a function returning it (or None / nan for the default), called only then.
     v0 : ndarray, shape (n_dof,) or (n_dof, k), optional
         Warm start: eigenvectors of a nearby model (model updating, Monte Carlo,
         parameter studies). The Lanczos start vector is built from them (see
@@ -524,6 +536,11 @@ def eigsh_lowest(
             n_fact += 1
         used = lu.backend
         opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
+        # assembled shell matrices store the zeros of uncoupled DOF pairs (membrane and
+        # bending of a flat element): drop them for the ~2 n_solves products with M
+        if M.nnz and np.count_nonzero(M.data) < 0.9 * M.nnz:
+            M = M.copy()
+            M.eliminate_zeros()
         start = _start_vector(ndof, v0, M)
         try:
             with _blas_limits():
