@@ -59,15 +59,38 @@ _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
 _ORDER_CACHE_SIZE = 8
 
 
-def _blas_limits():
+_CONTROLLER = None
+_LIMIT_DEPTH = 0
+
+
+class _BlasLimits:
+    """Limit BLAS threads to :data:`BLAS_THREADS` (re-entrant; the library scan of
+    threadpoolctl, ~30 ms, is made once per process and refreshed only when new BLAS
+    libraries appear)."""
+
+    def __enter__(self):
+        global _CONTROLLER, _LIMIT_DEPTH
+        self._limit = None
+        if BLAS_THREADS is not None and _LIMIT_DEPTH == 0:
+            from threadpoolctl import ThreadpoolController
+
+            if _CONTROLLER is None:
+                _CONTROLLER = ThreadpoolController()
+            self._limit = _CONTROLLER.limit(limits=BLAS_THREADS, user_api="blas")
+        _LIMIT_DEPTH += 1
+        return self
+
+    def __exit__(self, *exc):
+        global _LIMIT_DEPTH
+        _LIMIT_DEPTH -= 1
+        if self._limit is not None:
+            self._limit.restore_original_limits()
+        return False
+
+
+def _blas_limits() -> _BlasLimits:
     """Context manager limiting BLAS threads to :data:`BLAS_THREADS`."""
-    from contextlib import nullcontext
-
-    if BLAS_THREADS is None:
-        return nullcontext()
-    from threadpoolctl import threadpool_limits
-
-    return threadpool_limits(limits=BLAS_THREADS, user_api="blas")
+    return _BlasLimits()
 
 
 def _cholmod_module():
