@@ -28,8 +28,9 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import warnings
+import sys
 from collections import OrderedDict
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -360,8 +361,7 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
     with _blas_limits():
         if chol is not None and A.shape[0] > 1 and _positive_diagonal(A):
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
+                with _quiet_c_output():
                     f = chol(A)
             except ValueError as err:   # "Matrix is not positive definite!"
                 if backend == "cholmod":
@@ -388,6 +388,33 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
         except RuntimeError as err:
             raise ParameterError(singular) from err
     return Factorization("superlu", A.shape, solve, perm=perm, lu=lu)
+
+
+@contextmanager
+def _quiet_c_output():
+    """Silence the C library's stdout/stderr (CHOLMOD prints "not positive definite"
+    warnings with printf, which would corrupt a CLI's output)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = []
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        yield
+        return
+    try:
+        for fd in (1, 2):
+            try:
+                saved.append((fd, os.dup(fd)))
+                os.dup2(devnull, fd)
+            except OSError:
+                pass
+        yield
+    finally:
+        for fd, copy in saved:
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
 
 
 def _positive_diagonal(A) -> bool:
