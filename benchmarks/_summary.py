@@ -9,6 +9,7 @@ average before and after each benchmark, and the core count) is recorded beside 
 figure, because the machine is shared.
 
     python benchmarks/_summary.py [--out reports/bench.json] [--only fe,study] [--quick]
+    python benchmarks/_summary.py --collect     # gather reports/bench/*.json only
 
 ``--quick`` passes ``--quick`` to benchmarks that accept it (smaller problems).
 """
@@ -57,6 +58,9 @@ def main() -> None:
     ap.add_argument("--out", default=str(ROOT / "reports" / "bench.json"))
     ap.add_argument("--only", default="", help="comma-separated names (fe, study, ...)")
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--collect", action="store_true",
+                    help="run nothing: gather the per-benchmark JSON files already in "
+                         "reports/bench/ (from runs with MVTK_BENCH_JSON set)")
     args = ap.parse_args()
     out = Path(args.out)
     parts = out.parent / "bench"
@@ -70,6 +74,10 @@ def main() -> None:
         if only and name not in only:
             continue
         part = parts / f"{name}.json"
+        if args.collect:
+            for found in sorted(parts.glob(f"{name}*.json")):
+                summary["benchmarks"][found.stem] = json.loads(found.read_text())
+            continue
         part.unlink(missing_ok=True)
         env = dict(os.environ, **{ENV_KEY: str(part)})
         env["PYTHONPATH"] = str(ROOT) + os.pathsep + env.get("PYTHONPATH", "")
@@ -92,7 +100,7 @@ def main() -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(summary, indent=2, default=_plain))
     print(f"wrote {out}")
-    if any(b["returncode"] for b in summary["benchmarks"].values()):
+    if any(b.get("returncode") for b in summary["benchmarks"].values()):
         sys.exit(1)
 
 
