@@ -259,6 +259,9 @@ def main() -> None:
                      f"{op['eigen_cpu'] / (mv['assembly_cpu'] + mv['modal_cpu']):.1f}x cpu; "
                      f"load {op['load_before']:.1f}")
         print(line, flush=True)
+        # partial record after every round (a long peer run may be cut short)
+        write_result("fe", {"partial": True, "rounds": [{"mvtk": r[0], "opensees": r[1]}
+                                                        for r in rounds]})
     mv0 = rounds[0][0]
     med = {key: float(np.median([r[0][key] for r in rounds]))
            for key in ("assembly_s", "modal_s", "factorize_s", "solves_2n_s", "eigsh_s",
