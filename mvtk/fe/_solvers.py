@@ -13,7 +13,7 @@ pivots:
   per sparsity pattern, so model updating and Monte Carlo (new values, same mesh)
   compute it once.
 * ``backend="cholmod"`` (optional ``mvtk[cholmod]`` extra, ``sksparse-minimal``):
-  SuiteSparse CHOLMOD's supernodal Cholesky, about 2x faster to factorise. Its
+  SuiteSparse CHOLMOD's supernodal Cholesky, 1.2-2x faster to factorise (measured). Its
   Supernodal module is GPL-2.0-or-later, which is why it is not a default dependency.
   ``backend="auto"`` uses it when installed and when the matrix is positive definite,
   SuperLU otherwise.
