@@ -27,8 +27,11 @@ lint: $(STAMP)
 test: $(STAMP) lint
 	$(BIN)/python -m pytest
 
+# every benchmark in its own process, one JSON summary (figures, peer ratios, load) in
+# reports/bench.json; the peers need `pip install -e '.[bench,cholmod]'` (openseespy
+# also Debian's libblas3 liblapack3)
 bench: $(STAMP)
-	for f in benchmarks/bench_*.py; do $(BIN)/python $$f || exit 1; done
+	$(BIN)/python benchmarks/_summary.py --out reports/bench.json
 
 # the documentation site: warnings are errors, notebooks executed, links and API checked
 docs: $(STAMP)

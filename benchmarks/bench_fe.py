@@ -2,27 +2,44 @@
 
 Run on demand (not part of the test suite)::
 
-    .venv/bin/python benchmarks/bench_fe.py            # ~50 000 DOF + OpenSeesPy + 200 000 DOF
-    .venv/bin/python benchmarks/bench_fe.py --skip-large --skip-opensees
+    .venv/bin/python benchmarks/bench_fe.py                 # 90x90 (49 140 DOF), 3 rounds
+    .venv/bin/python benchmarks/bench_fe.py --repeats 1 --skip-opensees --skip-large
+    .venv/bin/python benchmarks/bench_fe.py --million       # 1 M-DOF plate, 20 modes
 
-Prints the assembly time, the time of one sparse factorisation of K, the modal-analysis
-time, the frequencies against the thin-plate reference (Leissa, NASA SP-160, 1969,
-CFFF square plate, nu = 0.3: lambda = 3.492, 8.525, 21.43, 27.33, 31.11 as Ritz upper
-bounds), the same problem in OpenSeesPy (ShellMITC4, ElasticMembranePlateSection, same
-mesh, its default eigen solver) when ``openseespy`` is importable, and the peak memory
-of a 200 000-DOF model in a child process.
+Each round runs, in fresh processes one after the other (interleaved, so both see the
+same machine load), mvtk (``plate_model`` + ``modal_analysis``) and OpenSeesPy on the
+same mesh (ShellMITC4, ElasticMembranePlateSection, its default eigen solver) when
+``openseespy`` is importable. It prints per round and as medians: the wall and CPU
+times, the speed ratio (OpenSees eigen / mvtk assembly + modal), the frequencies of both
+against the thin-plate reference (Leissa, NASA SP-160, 1969, CFFF square plate,
+nu = 0.3: lambda = 3.492, 8.525, 21.43, 27.33, 31.11 as Ritz upper bounds) and against
+each other, and the practical limit of shift-invert Lanczos on this matrix: one
+factorisation plus 2 x n_modes solves, measured in the same process, with the ratio of
+mvtk's eigen step to it and the number of solves ARPACK used. The first round also
+measures the fill ``nnz(L) + nnz(U)`` of SuperLU with the METIS ordering against
+SuperLU's own MMD ordering, and the SuperLU-only (permissive default) eigen time when
+the CHOLMOD backend is installed. ``--large`` adds a 200 000-DOF model in a child
+process with its peak memory. ``--million`` builds a 1 000 000-DOF plate, predicts the
+memory of its eigen step with :func:`mvtk.fe.estimate_eigen_memory` from the mesh graph
+(no assembly), refuses up front when the prediction exceeds the available memory, and
+otherwise solves 20 modes and prints time, peak RSS and prediction.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import resource
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _summary import write_result  # noqa: E402
 
 E, NU, RHO, A, H = 210e9, 0.3, 7850.0, 10.0, 0.05
 LEISSA = np.array([3.492, 8.525, 21.43, 27.33, 31.11])
@@ -33,37 +50,74 @@ def leissa_hz() -> np.ndarray:
     return LEISSA / (2 * np.pi * A**2) * np.sqrt(D / (RHO * H))
 
 
-def run_mvtk(n: int) -> dict:
+def _clock():
+    return time.perf_counter(), time.process_time()
+
+
+def _since(t):
+    return time.perf_counter() - t[0], time.process_time() - t[1]
+
+
+def child_mvtk(n: int, n_modes: int, fill: bool) -> dict:
     import mvtk.fe as fe
 
+    out: dict = {"load_before": os.getloadavg()[0]}
     steel = fe.IsotropicMaterial("steel", E, NU, RHO)
-    t0, c0 = time.perf_counter(), time.process_time()
+    t = _clock()
     model = fe.plate_model(A, A, [fe.Ply(steel, H)], nx=n, ny=n, clamp="x0")
-    t_asm, c_asm = time.perf_counter() - t0, time.process_time() - c0
-    t0, c0 = time.perf_counter(), time.process_time()
+    out["assembly_s"], out["assembly_cpu"] = _since(t)
+    t = _clock()
+    res = fe.modal_analysis(model, n_modes)
+    out["modal_s"], out["modal_cpu"] = _since(t)
+    out["fn_hz"] = res.fn_hz.tolist()
+    out["n_dof"] = model.n_dof
+    # the limit: one factorisation + 2 n_modes solves of the same matrix
+    t = _clock()
     lu = fe.factorize(model.K)
-    t_fac, c_fac = time.perf_counter() - t0, time.process_time() - c0
-    fill = lu.L.nnz + lu.U.nnz
+    out["factorize_s"], out["factorize_cpu"] = _since(t)
+    out["backend"] = lu.backend
+    b = np.random.default_rng(0).standard_normal((model.n_dof,))
+    t = _clock()
+    for _ in range(2 * n_modes):
+        lu.solve(b)
+    out["solves_2n_s"], out["solves_2n_cpu"] = _since(t)
     del lu
-    t0, c0 = time.perf_counter(), time.process_time()
-    res = fe.modal_analysis(model, 10)
-    t_eig, c_eig = time.perf_counter() - t0, time.process_time() - c0
-    return {"n_dof": model.n_dof, "assembly_s": t_asm, "factorize_s": t_fac,
-            "modal_s": t_eig, "assembly_cpu": c_asm, "factorize_cpu": c_fac,
-            "modal_cpu": c_eig, "lu_nnz": fill, "fn_hz": res.fn_hz.tolist(),
-            "mode_type": list(res.mode_type)}
+    t = _clock()
+    sol = fe.eigsh_lowest(model.K, model.M, n_modes)
+    out["eigsh_s"], out["eigsh_cpu"] = _since(t)
+    out["n_solves"] = sol.n_solves
+    out["n_factorizations"] = sol.n_factorizations
+    if fill:
+        for ordering in ("metis", "mmd"):
+            t = _clock()
+            f = fe.factorize(model.K, backend="superlu", ordering=ordering)
+            out[f"superlu_{ordering}_factorize_s"] = _since(t)[0]
+            out[f"superlu_{ordering}_fill"] = f.nnz_factor
+            del f
+        if out["backend"] != "superlu":
+            os.environ["MVTK_SPARSE_BACKEND"] = "superlu"
+            t = _clock()
+            s2 = fe.eigsh_lowest(model.K, model.M, n_modes)
+            out["superlu_eigsh_s"], out["superlu_eigsh_cpu"] = _since(t)
+            out["superlu_fn_rel_diff"] = float(np.max(np.abs(s2.omega2 / sol.omega2 - 1)))
+    out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out["load_after"] = os.getloadavg()[0]
+    return out
 
 
-def run_opensees(n: int) -> dict | None:
+def child_opensees(n: int, n_modes: int) -> dict | None:
     try:
         import openseespy.opensees as ops
     except (ImportError, RuntimeError) as err:  # RuntimeError: missing system BLAS
-        print(f"OpenSeesPy not usable: {err}")
-        return None
+        return {"error": f"OpenSeesPy not usable: {err}"}
+    out: dict = {"load_before": os.getloadavg()[0]}
     ops.wipe()
     ops.model("basic", "-ndm", 3, "-ndf", 6)
     xs = np.linspace(0, A, n + 1)
-    tag = lambda i, j: i * (n + 1) + j + 1  # noqa: E731
+
+    def tag(i, j):
+        return i * (n + 1) + j + 1
+
     t0 = time.perf_counter()
     for i, x in enumerate(xs):
         for j, y in enumerate(xs):
@@ -77,72 +131,198 @@ def run_opensees(n: int) -> dict | None:
             ops.element("ShellMITC4", e, tag(i, j), tag(i + 1, j), tag(i + 1, j + 1),
                         tag(i, j + 1), 1)
             e += 1
-    t_build = time.perf_counter() - t0
-    t0, c0 = time.perf_counter(), time.process_time()
-    lam = np.array(ops.eigen(10))
-    t_eig, c_eig = time.perf_counter() - t0, time.process_time() - c0
-    n_dof = 6 * (n + 1) ** 2
+    out["build_s"] = time.perf_counter() - t0
+    t = _clock()
+    lam = np.array(ops.eigen(n_modes))
+    out["eigen_s"], out["eigen_cpu"] = _since(t)
+    out["fn_hz"] = (np.sqrt(lam) / (2 * np.pi)).tolist()
     ops.wipe()
-    return {"n_dof": n_dof, "build_s": t_build, "eigen_s": t_eig, "eigen_cpu": c_eig,
-            "fn_hz": (np.sqrt(lam) / (2 * np.pi)).tolist()}
+    out["load_after"] = os.getloadavg()[0]
+    return out
 
 
-def large_child(n: int) -> None:
-    out = run_mvtk(n)
+def _million_graph(n: int):
+    """Node adjacency graph and free DOFs per node of an n x n plate clamped at x = 0."""
+    import scipy.sparse as sp
+
+    nn = (n + 1) ** 2
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    base = (i * (n + 1) + j).ravel()
+    el = np.column_stack([base, base + n + 1, base + n + 2, base + 1])
+    r = np.repeat(el, 4, axis=1).ravel()
+    c = np.tile(el, (1, 4)).ravel()
+    G = sp.csr_matrix((np.ones(len(r), dtype=np.float32), (r, c)), shape=(nn, nn))
+    nfree = np.full(nn, 6)
+    nfree[: n + 1] = 0          # clamped edge x = 0 (first column of nodes)
+    return G, nfree
+
+
+def _mem_available() -> int:
+    for line in Path("/proc/meminfo").read_text().splitlines():
+        if line.startswith("MemAvailable"):
+            return int(line.split()[1]) * 1024
+    return 0
+
+
+def child_million(n: int, n_modes: int) -> dict:
+    import mvtk.fe as fe
+
+    out: dict = {"n": n, "load_before": os.getloadavg()[0]}
+    t = time.perf_counter()
+    G, nfree = _million_graph(n)
+    est = fe.estimate_eigen_memory(G, n_modes, dofs_per_vertex=nfree)
+    out["estimate_s"] = time.perf_counter() - t
+    # assembly holds the element matrices K_e, M_e and the pattern positions
+    n_el = n * n
+    assembly = n_el * 576 * (8 * 3 + 8)
+    out.update(n_dof=est.n_dof, predicted_total_gib=est.total_gib,
+               predicted_assembly_gib=assembly / 2**30,
+               predicted_nnz_storage=est.nnz_factor,
+               available_gib=_mem_available() / 2**30)
+    need = max(est.total, assembly + est.matrices)
+    if need > 0.8 * _mem_available():
+        out["refused"] = (f"predicted {need / 2**30:.1f} GiB > 80 % of the "
+                          f"{out['available_gib']:.1f} GiB available")
+        return out
+    steel = fe.IsotropicMaterial("steel", E, NU, RHO)
+    t = _clock()
+    model = fe.plate_model(A, A, [fe.Ply(steel, H)], nx=n, ny=n, clamp="x0")
+    out["assembly_s"], out["assembly_cpu"] = _since(t)
+    out["rss_after_assembly_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    t = _clock()
+    sol = fe.eigsh_lowest(model.K, model.M, n_modes)
+    out["eigsh_s"], out["eigsh_cpu"] = _since(t)
+    out["backend"], out["n_solves"] = sol.backend, sol.n_solves
+    out["fn_hz"] = (np.sqrt(np.abs(sol.omega2)) / (2 * np.pi)).tolist()
     out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    sys.stdout.write(json.dumps(out) + "\n")
+    out["load_after"] = os.getloadavg()[0]
+    return out
+
+
+def _run_child(*args: str, env: dict | None = None) -> dict:
+    proc = subprocess.run([sys.executable, __file__, "--child", *args], capture_output=True,
+                          text=True, env=env)
+    if proc.returncode:
+        raise RuntimeError(f"child {args} failed:\n{proc.stderr[-3000:]}")
+    return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
-    ap = argparse.ArgumentParser()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=90, help="elements per side (90 -> 49 140 DOF)")
+    ap.add_argument("--modes", type=int, default=10)
+    ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-opensees", action="store_true")
     ap.add_argument("--skip-large", action="store_true")
-    ap.add_argument("--large-child", type=int, default=0, help=argparse.SUPPRESS)
+    ap.add_argument("--million", action="store_true", help="only the 1 M-DOF case")
+    ap.add_argument("--million-n", type=int, default=408, help="408 -> 1 000 000 DOF")
+    ap.add_argument("--quick", action="store_true", help="1 round, no 200k case")
+    ap.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    if args.large_child:
-        large_child(args.large_child)
-        return
-    ref = leissa_hz()
-    r = run_mvtk(args.n)
-    print(f"mvtk MITC4: {args.n}x{args.n} elements, {r['n_dof']} free DOF")
-    print(f"  wall: assembly {r['assembly_s']:.2f} s, one factorisation of K "
-          f"{r['factorize_s']:.2f} s (nnz(L+U) = {r['lu_nnz']}), modal analysis (10 modes) "
-          f"{r['modal_s']:.2f} s")
-    print(f"  cpu:  assembly {r['assembly_cpu']:.2f} s, factorisation {r['factorize_cpu']:.2f} s, "
-          f"modal {r['modal_cpu']:.2f} s (process CPU time; wall is inflated on a busy machine)")
-    total = r["assembly_s"] + r["modal_s"]
-    ctotal = r["assembly_cpu"] + r["modal_cpu"]
-    print(f"  total wall {total:.2f} s = {total / r['factorize_s']:.2f} x one factorisation; "
-          f"total cpu {ctotal:.2f} s = {ctotal / r['factorize_cpu']:.2f} x")
-    print("  fn_hz:", np.round(r["fn_hz"], 4).tolist())
-    print("  types:", r["mode_type"])
-    print("  Leissa thin-plate reference (first 5, Ritz upper bounds):",
-          np.round(ref, 4).tolist())
-    print("  mvtk / Leissa - 1:", np.round(np.array(r["fn_hz"][:5]) / ref - 1, 4).tolist())
-    if not args.skip_opensees:
-        o = run_opensees(args.n)
-        if o is None:
-            print("OpenSeesPy not importable: comparison skipped (pip install openseespy)")
+    if args.child:
+        kind, *rest = args.child
+        if kind == "mvtk":
+            r = child_mvtk(int(rest[0]), int(rest[1]), rest[2] == "1")
+        elif kind == "opensees":
+            r = child_opensees(int(rest[0]), int(rest[1]))
         else:
-            print(f"OpenSeesPy ShellMITC4: {o['n_dof']} DOF (before fixities), build "
-                  f"{o['build_s']:.2f} s, eigen(10) wall {o['eigen_s']:.2f} s, "
-                  f"cpu {o['eigen_cpu']:.2f} s")
-            print("  fn_hz:", np.round(o["fn_hz"], 4).tolist())
-            print("  OpenSees / Leissa - 1:",
-                  np.round(np.array(o["fn_hz"][:5]) / ref - 1, 4).tolist())
-            print(f"  speed ratio (OpenSees eigen) / (mvtk assembly + modal): wall "
-                  f"{o['eigen_s'] / total:.1f}, cpu {o['eigen_cpu'] / ctotal:.1f}")
+            r = child_million(int(rest[0]), int(rest[1]))
+        sys.stdout.write(json.dumps(r) + "\n")
+        return
+    if args.million:
+        m = _run_child("million", str(args.million_n), "20")
+        print(json.dumps(m, indent=1))
+        write_result("fe_million", {"figures": m})
+        return
+    if args.quick:
+        args.repeats, args.skip_large = 1, True
+    ref = leissa_hz()
+    rounds = []
+    for k in range(args.repeats):
+        mv = _run_child("mvtk", str(args.n), str(args.modes), "1" if k == 0 else "0")
+        op = None if args.skip_opensees else _run_child("opensees", str(args.n), str(args.modes))
+        if op is not None and "error" in op:
+            print(op["error"])
+            op = None
+        rounds.append((mv, op))
+        total = mv["assembly_s"] + mv["modal_s"]
+        limit = mv["factorize_s"] + mv["solves_2n_s"]
+        line = (f"round {k + 1}: mvtk [{mv['backend']}] assembly {mv['assembly_s']:.2f} s + "
+                f"modal {mv['modal_s']:.2f} s = {total:.2f} s (cpu "
+                f"{mv['assembly_cpu'] + mv['modal_cpu']:.2f} s); eigsh {mv['eigsh_s']:.2f} s "
+                f"with {mv['n_solves']} solves, limit (1 factorisation {mv['factorize_s']:.2f}"
+                f" s + {2 * args.modes} solves {mv['solves_2n_s']:.2f} s) {limit:.2f} s -> "
+                f"{mv['eigsh_s'] / limit:.2f}x; load {mv['load_before']:.1f}")
+        if op is not None:
+            line += (f"\n         OpenSeesPy eigen {op['eigen_s']:.2f} s (cpu "
+                     f"{op['eigen_cpu']:.2f} s), ratio {op['eigen_s'] / total:.1f}x wall, "
+                     f"{op['eigen_cpu'] / (mv['assembly_cpu'] + mv['modal_cpu']):.1f}x cpu; "
+                     f"load {op['load_before']:.1f}")
+        print(line, flush=True)
+        # partial record after every round (a long peer run may be cut short)
+        write_result("fe", {"partial": True, "rounds": [{"mvtk": r[0], "opensees": r[1]}
+                                                        for r in rounds]})
+    mv0 = rounds[0][0]
+    med = {key: float(np.median([r[0][key] for r in rounds]))
+           for key in ("assembly_s", "modal_s", "factorize_s", "solves_2n_s", "eigsh_s",
+                       "assembly_cpu", "modal_cpu")}
+    total = med["assembly_s"] + med["modal_s"]
+    limit_ratio = float(np.median([r[0]["eigsh_s"] / (r[0]["factorize_s"]
+                                                       + r[0]["solves_2n_s"])
+                                   for r in rounds]))
+    fn = np.array(mv0["fn_hz"])
+    print(f"mvtk MITC4: {args.n}x{args.n} elements, {mv0['n_dof']} free DOF, backend "
+          f"{mv0['backend']}, {mv0['n_solves']} solves, {mv0['n_factorizations']} "
+          "factorisation(s)")
+    print(f"  median of {args.repeats}: assembly {med['assembly_s']:.2f} s, modal "
+          f"{med['modal_s']:.2f} s, total {total:.2f} s; eigen step / (1 factorisation + "
+          f"{2 * args.modes} solves) = {limit_ratio:.2f} (target <= 1.5)")
+    print(f"  fill nnz(L)+nnz(U), SuperLU: METIS {mv0['superlu_metis_fill']:,} "
+          f"({mv0['superlu_metis_factorize_s']:.2f} s), MMD {mv0['superlu_mmd_fill']:,} "
+          f"({mv0['superlu_mmd_factorize_s']:.2f} s)")
+    if "superlu_eigsh_s" in mv0:
+        print(f"  SuperLU-only eigen step (permissive default install): "
+              f"{mv0['superlu_eigsh_s']:.2f} s vs {mv0['backend']} {mv0['eigsh_s']:.2f} s; "
+              f"eigenvalues agree to {mv0['superlu_fn_rel_diff']:.1e}")
+    print("  fn_hz:", np.round(fn, 4).tolist())
+    print("  mvtk / Leissa - 1:", np.round(fn[:5] / ref - 1, 4).tolist())
+    payload = {"figures": {"n_dof": mv0["n_dof"], "backend": mv0["backend"],
+                           "n_solves": mv0["n_solves"], **{f"median_{k}": v
+                                                           for k, v in med.items()},
+                           "median_total_s": total, "limit_ratio": limit_ratio,
+                           "fill_metis": mv0["superlu_metis_fill"],
+                           "fill_mmd": mv0["superlu_mmd_fill"],
+                           "superlu_eigsh_s": mv0.get("superlu_eigsh_s"),
+                           "fn_hz": fn.tolist()},
+               "rounds": [{"mvtk": r[0], "opensees": r[1]} for r in rounds]}
+    ops = [r for r in rounds if r[1] is not None]
+    if ops:
+        ratios = [o["eigen_s"] / (m["assembly_s"] + m["modal_s"]) for m, o in ops]
+        cratios = [o["eigen_cpu"] / (m["assembly_cpu"] + m["modal_cpu"]) for m, o in ops]
+        ofn = np.array(ops[0][1]["fn_hz"])
+        agree = float(np.max(np.abs(fn / ofn - 1)))
+        print(f"OpenSeesPy ShellMITC4: eigen({args.modes}) median "
+              f"{np.median([o['eigen_s'] for _, o in ops]):.2f} s")
+        print("  fn_hz:", np.round(ofn, 4).tolist())
+        print(f"  mvtk vs OpenSees frequencies: max |rel diff| {agree:.1e} (target 1e-4)")
+        print(f"  speed ratio OpenSees eigen / mvtk (assembly + modal): per round "
+              f"{[round(x, 1) for x in ratios]}, median {np.median(ratios):.1f}x wall "
+              f"(target 30x), {np.median(cratios):.1f}x cpu")
+        payload["peer"] = "OpenSeesPy ShellMITC4 eigen"
+        payload["ratios"] = {"median_wall": float(np.median(ratios)),
+                             "median_cpu": float(np.median(cratios)),
+                             "per_round_wall": ratios}
+        payload["figures"]["opensees_median_eigen_s"] = float(
+            np.median([o["eigen_s"] for _, o in ops]))
+        payload["figures"]["fn_max_rel_diff_vs_opensees"] = agree
     if not args.skip_large:
-        n = 182  # 183^2 nodes x 6 - clamp = ~200 000 DOF
-        proc = subprocess.run([sys.executable, __file__, "--large-child", str(n)],
-                              capture_output=True, text=True, check=True)
-        big = json.loads(proc.stdout.strip().splitlines()[-1])
+        big = _run_child("mvtk", "182", str(args.modes), "0")
         print(f"200k case: {big['n_dof']} DOF, wall: assembly {big['assembly_s']:.2f} s, "
-              f"factorisation {big['factorize_s']:.2f} s, modal {big['modal_s']:.2f} s; cpu: "
-              f"{big['assembly_cpu']:.2f} / {big['factorize_cpu']:.2f} / "
-              f"{big['modal_cpu']:.2f} s; peak RSS {big['peak_rss_mib']:.0f} MiB")
-        print("  fn_hz:", np.round(big["fn_hz"][:5], 4).tolist())
+              f"modal {big['modal_s']:.2f} s, one factorisation {big['factorize_s']:.2f} s; "
+              f"peak RSS {big['peak_rss_mib']:.0f} MiB")
+        payload["figures"]["large_200k"] = {k: big[k] for k in (
+            "n_dof", "assembly_s", "modal_s", "factorize_s", "peak_rss_mib", "backend")}
+    write_result("fe", payload)
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ accuracy. Best of ``--repeat`` runs.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import tomllib
 from pathlib import Path
@@ -31,6 +32,8 @@ from mvtk.fe import build_model, eigsh_lowest
 from mvtk.reduction import compare_modes, craig_bampton
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _summary import write_result  # noqa: E402
 
 
 def best_of(fn, repeat):
@@ -68,6 +71,11 @@ def main() -> None:
     print(f"Craig-Bampton ({se.n_boundary} boundary DOF + {se.n_modes} modes = {se.n_dof} DOF)"
           f" : {t_cb:7.3f} s")
     print(f"ratio CB / full eigen    : {t_cb / t_full:7.2f}   (target < 2)")
+    write_result("reduction", {
+        "figures": {"n_dof": model.n_dof, "full_eigen_s": t_full, "craig_bampton_s": t_cb,
+                    "target_ratio": 2.0},
+        "peer": "full-model eigen solve (same run)",
+        "ratios": {"craig_bampton_over_full_eigen": t_cb / t_full}})
     cmp = compare_modes(model, se, 4)
     print("SE vs FE (Table 5 shape):")
     print(cmp.to_dataframe().to_string(index=False, float_format="{:.5g}".format))

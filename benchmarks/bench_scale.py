@@ -23,6 +23,7 @@ import argparse
 import os
 import resource
 import shutil
+import sys
 import tempfile
 import threading
 import time
@@ -31,6 +32,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _summary import write_result  # noqa: E402
 
 
 def _peak_rss_mb() -> float:
@@ -146,7 +149,11 @@ def main() -> None:
     ap.add_argument("--memory-limit", default="1GiB", help="per-worker limit for the PSD")
     ap.add_argument("--skip-psd", action="store_true")
     ap.add_argument("--skip-mc", action="store_true")
+    ap.add_argument("--quick", action="store_true", help="0.3 GB campaign, 40 samples")
     args = ap.parse_args()
+    if args.quick:
+        args.size_gb, args.mc_samples = min(args.size_gb, 0.3), min(args.mc_samples, 40)
+    figures, ratios = {}, {}
     import scipy.signal
 
     import mvtk.fe
@@ -181,6 +188,9 @@ def main() -> None:
                       f"{nbytes / 1e6 / dt / peer_mbs:.2f}, max rel diff record 0 vs scipy "
                       f"{err:.1e}")
             print(f"PSD speed-up 2 vs 1 worker: {results[1] / results[2]:.2f}")
+            figures.update(psd_gb=nbytes / 1e9, psd_1_worker_s=results[1],
+                           psd_2_workers_s=results[2], peer_welch_mb_s=peer_mbs)
+            ratios["psd_2_workers_over_peer_throughput"] = nbytes / 1e6 / results[2] / peer_mbs
         finally:
             shutil.rmtree(folder, ignore_errors=True)
     if not args.skip_mc:
@@ -204,8 +214,15 @@ def main() -> None:
                   f"peak RSS per worker {peak:.0f} MB, "
                   f"f1 mean {tab.mean_hz[0]:.3f} Hz CoV {tab['cov'][0]:.4f}")
         print(f"Monte Carlo speed-up 2 vs 1 worker: {times[1] / times[2]:.2f}")
+        figures.update(mc_n_dof=n_dof, mc_samples=args.mc_samples,
+                       mc_in_process_samples_per_s=n_peer / dt0,
+                       mc_1_worker_s=times[1], mc_2_workers_s=times[2])
+        ratios["mc_2_workers_over_in_process"] = args.mc_samples / times[2] / (n_peer / dt0)
         # f ~ sqrt(E / rho): first-order CoV(f) = sqrt((CoV_E / 2)^2 + (CoV_rho / 2)^2)
         print(f"closed-form first-order CoV(f): {np.hypot(0.03 / 2, 0.01 / 2):.4f}")
+    write_result("scale", {"figures": figures,
+                           "peer": "scipy.signal.welch in memory; in-process Monte Carlo",
+                           "ratios": ratios})
 
 
 if __name__ == "__main__":

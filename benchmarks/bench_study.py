@@ -10,6 +10,7 @@ Run on demand: ``.venv/bin/python benchmarks/bench_study.py``. Prints
 
 from __future__ import annotations
 
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -21,6 +22,8 @@ from mvtk.report import render_table
 from mvtk.study import run
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _summary import write_result  # noqa: E402
 
 
 def _best(fn, repeat: int = 3) -> float:
@@ -51,6 +54,11 @@ def main() -> None:
     t_pandas = _best(lambda: df.to_html())
     print(f"render_table 5000 rows: {t_mvtk * 1e3:7.1f} ms; pandas.to_html (peer): "
           f"{t_pandas * 1e3:7.1f} ms; ratio {t_mvtk / t_pandas:.2f}")
+    write_result("study", {
+        "figures": {"cold_s": cold, "warm_s": warm, "target_cold_s": 10.0,
+                    "stages_s": dict(res.timings_s), "render_table_5000_s": t_mvtk},
+        "peer": "pandas.DataFrame.to_html (table rendering)",
+        "ratios": {"render_table_pandas_over_mvtk": t_pandas / t_mvtk}})
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ Run:  .venv/bin/python benchmarks/bench_updating.py [--element-size 0.0028] [--n
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 import tomllib
 import warnings
@@ -22,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from _summary import write_result  # noqa: E402
 
 PARAMS = [  # path, lower, upper, log-scaled
     ("materials.steel.E", 1.5e11, 2.5e11, False),
@@ -86,7 +89,12 @@ def main() -> None:
           .to_string())
     print(r.parameter_table()[["initial", "updated", "change_pct"]].to_string())
 
+    figures = {"n_dof": model.n_dof, "total_s": total, "n_evaluations": r.n_evaluations,
+               "n_jacobians": r.n_jacobians, "build_s": tm["build_s"],
+               "eigen_s": tm["eigen_s"], "n_eigen": tm["n_eigen"],
+               "sensitivity_s": tm["sensitivity_s"]}
     if a.no_peer:
+        write_result("updating", {"figures": figures})
         return
     # peer: least_squares with a 2-point finite-difference Jacobian, same residuals and
     # the same (log-)scaled variables
@@ -122,6 +130,10 @@ def main() -> None:
     print(f"\npeer least_squares(jac='2-point'): {peer:.1f} s, {n_eval[0]} model evaluations, "
           f"status {sol.status}; updated {[float(f'{v:.6g}') for v in to_p(sol.x)]}")
     print(f"ratio peer / mvtk: {peer / total:.2f}")
+    figures["peer_s"] = peer
+    write_result("updating", {"figures": figures,
+                              "peer": "scipy.optimize.least_squares, 2-point Jacobian",
+                              "ratios": {"peer_over_mvtk": peer / total}})
 
 
 if __name__ == "__main__":

@@ -1,6 +1,11 @@
 """Finite element modelling: sections, elements, meshes, assembly, solvers, piezo."""
 
-from ._assembly import assemble_element_matrices, assemble_shell_model
+from ._assembly import (
+    SparsityPattern,
+    assemble_element_matrices,
+    assemble_shell_model,
+    sparsity_pattern,
+)
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
 from ._general import (
     GENERAL_SUPPORTS,
@@ -64,7 +69,15 @@ from ._sections import (
 )
 from ._shell import DRILL_FACTOR, mitc4_matrices
 from ._shell3d import TRI_SHEAR_ALPHA, mitc3_matrices, shell_element_matrices, shell_frames
-from ._solvers import EigenSolution, eigsh_lowest, factorize
+from ._solvers import (
+    EigenSolution,
+    Factorization,
+    MemoryEstimate,
+    eigsh_lowest,
+    estimate_eigen_memory,
+    factorize,
+    fill_reducing_ordering,
+)
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
 
 __all__ = [
@@ -73,6 +86,12 @@ __all__ = [
     "EigenSolution",
     "eigsh_lowest",
     "factorize",
+    "Factorization",
+    "fill_reducing_ordering",
+    "estimate_eigen_memory",
+    "MemoryEstimate",
+    "SparsityPattern",
+    "sparsity_pattern",
     "IsotropicMaterial",
     "OrthotropicMaterial",
     "PiezoMaterial",

@@ -331,11 +331,9 @@ def _lowest_modes(model: FEModel, n: int, sigma: float | None):
     With ``sigma=None`` the shift is 0 when K is non-singular; otherwise it is -1 % of
     :func:`_smooth_trial_scale`, a model-aware estimate of the first elastic eigenvalue.
     """
-    singular_shift = None
-    if sigma is None:
-        scale = _smooth_trial_scale(model)
-        if np.isfinite(scale):
-            singular_shift = -1e-2 * scale
+    def singular_shift():  # evaluated by eigsh_lowest only when K is singular
+        return -1e-2 * _smooth_trial_scale(model)
+
     return eigsh_lowest(model.K, model.M, n, sigma=sigma, singular_shift=singular_shift)
 
 

@@ -2,76 +2,447 @@
 
 See PHYSICS.md section 6: scipy's ``splu`` with its default partial pivoting destroys
 the fill-reducing ordering on FE stiffness matrices. For symmetric positive (semi)
-definite matrices we factorise with a symmetric ordering and diagonal pivots.
+definite matrices we factorise with a symmetric fill-reducing ordering and diagonal
+pivots:
+
+* ``backend="superlu"`` (default install, BSD): scipy's SuperLU on the matrix permuted
+  by a nested-dissection ordering computed by METIS (``pymetis``, MIT/Apache-2.0) on
+  the compressed graph (DOFs with identical sparsity rows, i.e. the DOFs of one node,
+  are ordered as one vertex). On a 49 140-DOF shell plate this cuts the fill from
+  10.3 M (SuperLU's own MMD) to 8.8 M entries, about CHOLMOD's. The ordering is cached
+  per sparsity pattern, so model updating and Monte Carlo (new values, same mesh)
+  compute it once.
+* ``backend="cholmod"`` (optional ``mvtk[cholmod]`` extra, ``sksparse-minimal``):
+  SuiteSparse CHOLMOD's supernodal Cholesky, 1.2-2x faster to factorise (measured). Its
+  Supernodal module is GPL-2.0-or-later, which is why it is not a default dependency.
+  ``backend="auto"`` uses it when installed and when the matrix is positive definite,
+  SuperLU otherwise.
+
+BLAS threads are limited (threadpoolctl) around factorisations and eigen solves: the
+second OpenBLAS thread made the small dense kernels of sparse triangular solves 2-3x
+slower on a loaded 2-core machine.
 """
 
 from __future__ import annotations
 
+import hashlib
+import math
+import os
+import sys
+from collections import OrderedDict
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..errors import ConvergenceError, DimensionError, ParameterError
+from ..errors import ConvergenceError, DimensionError, MissingDependencyError, ParameterError
 
-__all__ = ["factorize", "eigsh_lowest", "EigenSolution"]
+__all__ = [
+    "factorize",
+    "eigsh_lowest",
+    "EigenSolution",
+    "Factorization",
+    "fill_reducing_ordering",
+    "estimate_eigen_memory",
+    "MemoryEstimate",
+    "BACKENDS",
+]
+
+BACKENDS = ("auto", "superlu", "cholmod")
+#: BLAS threads used inside factorisations and eigen solves (None: leave as is).
+BLAS_THREADS: int | None = 1
+#: Default relative eigenvalue tolerance of :func:`eigsh_lowest` (see its docstring).
+DEFAULT_TOL = 1e-10
+
+_ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
+_ORDER_CACHE_SIZE = 8
 
 
-def factorize(A) -> spla.SuperLU:
-    """LU factorisation of a sparse symmetric matrix with a symmetric ordering.
+_CONTROLLER = None
+_LIMIT_DEPTH = 0
+
+
+class _BlasLimits:
+    """Limit BLAS threads to :data:`BLAS_THREADS` (re-entrant; the library scan of
+    threadpoolctl, ~30 ms, is made once per process and refreshed only when new BLAS
+    libraries appear)."""
+
+    def __enter__(self):
+        global _CONTROLLER, _LIMIT_DEPTH
+        self._limit = None
+        if BLAS_THREADS is not None and _LIMIT_DEPTH == 0:
+            from threadpoolctl import ThreadpoolController
+
+            if _CONTROLLER is None:
+                _CONTROLLER = ThreadpoolController()
+            self._limit = _CONTROLLER.limit(limits=BLAS_THREADS, user_api="blas")
+        _LIMIT_DEPTH += 1
+        return self
+
+    def __exit__(self, *exc):
+        global _LIMIT_DEPTH
+        _LIMIT_DEPTH -= 1
+        if self._limit is not None:
+            self._limit.restore_original_limits()
+        return False
+
+
+def _blas_limits() -> _BlasLimits:
+    """Context manager limiting BLAS threads to :data:`BLAS_THREADS`."""
+    return _BlasLimits()
+
+
+def _cholmod_module():
+    try:
+        from sksparse_minimal import SparseCholesky
+    except ImportError:
+        return None
+    return SparseCholesky
+
+
+def _pattern_key(A: sp.csc_matrix) -> bytes:
+    h = hashlib.blake2b(digest_size=20)
+    h.update(np.array(A.shape, dtype=np.int64).tobytes())
+    h.update(str(A.indices.dtype).encode())
+    h.update(np.ascontiguousarray(A.indptr).tobytes())
+    h.update(np.ascontiguousarray(A.indices).tobytes())
+    return h.digest()
+
+
+def _supervariables(A: sp.csc_matrix) -> np.ndarray:
+    """Group number of every column: consecutive columns with identical row patterns
+    (the DOFs of one node) share a group."""
+    n = A.shape[0]
+    indptr, indices = A.indptr.astype(np.int64), A.indices
+    length = np.diff(indptr)
+    same = np.zeros(n, dtype=bool)           # same[i]: column i has column i-1's pattern
+    if n > 1:
+        cand = np.flatnonzero(length[1:] == length[:-1]) + 1
+        if cand.size:
+            ln = length[cand]
+            pos = np.repeat(indptr[cand] - np.cumsum(np.r_[0, ln[:-1]]), ln) + np.arange(
+                ln.sum())
+            mismatch = indices[pos] != indices[pos - length[cand].repeat(ln)]
+            bad = np.bincount(np.repeat(np.arange(len(cand)), ln), weights=mismatch,
+                              minlength=len(cand))
+            same[cand[bad == 0]] = True
+    return np.cumsum(~same) - 1
+
+
+def fill_reducing_ordering(A, method: str = "auto") -> np.ndarray | None:
+    """Symmetric fill-reducing permutation ``p`` (factorise ``A[p][:, p]``).
+
+    Parameters
+    ----------
+    A : sparse matrix (n, n)
+        Structurally symmetric; only its pattern is used.
+    method : {"auto", "metis", "mmd"}
+        ``"metis"``: METIS nested dissection (``pymetis``) on the graph compressed to
+        supervariables (columns with identical patterns, i.e. the DOFs of a node), which
+        keeps node DOFs together. ``"mmd"``: return None (SuperLU orders the matrix itself
+        with multiple minimum degree on A'+A). ``"auto"``: METIS when ``pymetis`` is
+        importable, else MMD.
+
+    Returns
+    -------
+    ndarray of int or None
+        Cached per sparsity pattern.
+    """
+    if method not in ("auto", "metis", "mmd"):
+        raise ParameterError(f"ordering must be 'auto', 'metis' or 'mmd', got {method!r}")
+    if method == "mmd":
+        return None
+    try:
+        import pymetis
+    except ImportError as err:
+        if method == "metis":
+            raise MissingDependencyError(
+                "METIS ordering needs pymetis, which is not installed; install it with: "
+                "pip install pymetis"
+            ) from err
+        return None
+    A = sp.csc_matrix(A)
+    n = A.shape[0]
+    if n < 64:
+        return None
+    key = _pattern_key(A)
+    perm = _ORDER_CACHE.get(key)
+    if perm is not None:
+        _ORDER_CACHE.move_to_end(key)
+        return perm
+    group = _supervariables(A)
+    ng = int(group[-1]) + 1
+    first = np.searchsorted(group, np.arange(ng))
+    size = np.diff(np.r_[first, n])
+    # adjacency of the compressed graph: groups of the rows of each group's first column
+    cols = np.repeat(np.arange(ng), np.diff(A.indptr)[first])
+    rows = group[A.indices[_ranges(A.indptr[first], A.indptr[first + 1])]]
+    G = sp.csr_matrix((np.ones(len(rows), dtype=np.int8), (cols, rows)), shape=(ng, ng))
+    G = G.maximum(G.T).tocsr()
+    G.setdiag(0)
+    G.eliminate_zeros()
+    # METIS_NodeND: row k of the permuted matrix is row seq[k] of the original
+    seq, _ = pymetis.nested_dissection(adjacency=pymetis.CSRAdjacency(G.indptr, G.indices))
+    seq = np.asarray(seq, dtype=np.int64)
+    perm = np.repeat(first[seq], size[seq]) + _ranges_local(size[seq])
+    _ORDER_CACHE[key] = perm
+    while len(_ORDER_CACHE) > _ORDER_CACHE_SIZE:
+        _ORDER_CACHE.popitem(last=False)
+    return perm
+
+
+def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """Concatenation of ``arange(start[i], stop[i])``."""
+    ln = stop - start
+    return np.repeat(start - np.r_[0, np.cumsum(ln)[:-1]], ln) + np.arange(int(ln.sum()))
+
+
+def _ranges_local(size: np.ndarray) -> np.ndarray:
+    """Concatenation of ``arange(size[i])``."""
+    return np.arange(int(size.sum())) - np.repeat(np.r_[0, np.cumsum(size)[:-1]], size)
+
+
+class Factorization:
+    """Factorisation of a sparse symmetric matrix ``A``, returned by :func:`factorize`.
+
+    Attributes
+    ----------
+    backend : str
+        ``"superlu"`` or ``"cholmod"``.
+    shape : tuple
+    nnz_factor, nnz_storage : int or None
+        Nonzero entries of L and U, and entries SuperLU stores (None for CHOLMOD,
+        whose minimal binding does not report them).
+    perm : ndarray or None
+        Symmetric permutation applied before SuperLU (None: SuperLU's own ordering).
+    n_solves : int
+        Number of right-hand sides solved so far.
+    """
+
+    def __init__(self, backend: str, shape, solver, perm=None, lu=None):
+        self.backend = backend
+        self.shape = shape
+        self._solver = solver
+        self.perm = perm
+        self._lu = lu
+        self.n_solves = 0
+
+    @property
+    def nnz_factor(self) -> int | None:
+        """Numerically nonzero entries of L and U (SuperLU only; builds both: slow)."""
+        if self._lu is None:
+            return None
+        return int(self._lu.L.nnz + self._lu.U.nnz)
+
+    @property
+    def nnz_storage(self) -> int | None:
+        """Entries stored by SuperLU (supernodal L and U, with zeros inside blocks)."""
+        if self._lu is None:
+            return None
+        return int(self._lu.nnz)
+
+    @property
+    def L(self):
+        """SuperLU's unit lower factor (of the permuted matrix); SuperLU backend only."""
+        if self._lu is None:
+            raise AttributeError("the CHOLMOD backend does not expose its factor")
+        return self._lu.L
+
+    @property
+    def U(self):
+        """SuperLU's upper factor (of the permuted matrix); SuperLU backend only."""
+        if self._lu is None:
+            raise AttributeError("the CHOLMOD backend does not expose its factor")
+        return self._lu.U
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``A^-1 b`` for ``b`` of shape (n,) or (n, k)."""
+        b = np.asarray(b, dtype=float)
+        if b.shape[:1] != self.shape[:1] or b.ndim > 2:
+            raise DimensionError(
+                f"right-hand side must have shape ({self.shape[0]},) or "
+                f"({self.shape[0]}, k), got {b.shape}"
+            )
+        self.n_solves += 1 if b.ndim == 1 else b.shape[1]
+        with _blas_limits():
+            return self._solver(b)
+
+
+def _permute(A: sp.csc_matrix, perm: np.ndarray) -> sp.csc_matrix:
+    """``A[perm][:, perm]`` for a CSC matrix, without scipy's two fancy-index copies."""
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(len(perm))
+    length = np.diff(A.indptr)[perm]
+    indptr = np.zeros(len(perm) + 1, dtype=np.int64)
+    np.cumsum(length, out=indptr[1:])
+    take = _ranges(A.indptr[perm].astype(np.int64), A.indptr[perm + 1].astype(np.int64))
+    itype = A.indices.dtype
+    Ap = sp.csc_matrix((A.data[take], inv[A.indices[take]].astype(itype),
+                        indptr.astype(itype)), shape=A.shape)
+    Ap.sort_indices()
+    return Ap
+
+
+def _superlu(A: sp.csc_matrix, perm):
+    Ap = A if perm is None else _permute(A, perm)
+    lu = spla.splu(
+        Ap,
+        permc_spec="MMD_AT_PLUS_A" if perm is None else "NATURAL",
+        diag_pivot_thresh=0.0,
+        options={"SymmetricMode": True},
+    )
+    if perm is None:
+        return lu.solve, lu
+    inv = np.empty_like(perm)
+    inv[perm] = np.arange(len(perm))
+
+    def solve(b):
+        return lu.solve(np.ascontiguousarray(b[perm]))[inv]
+
+    return solve, lu
+
+
+def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization:
+    """Factorisation of a sparse symmetric matrix with a symmetric fill-reducing ordering.
 
     Parameters
     ----------
     A : sparse matrix, shape (n, n)
         Symmetric, typically a stiffness matrix or ``K - sigma M``.
+    backend : {"auto", "superlu", "cholmod"}
+        ``"superlu"``: scipy's SuperLU (LU with diagonal pivots, symmetric mode) on the
+        matrix reordered by :func:`fill_reducing_ordering`. ``"cholmod"``: CHOLMOD
+        supernodal Cholesky (``pip install "mvtk[cholmod]"``; GPL component), positive
+        definite matrices only. ``"auto"``: CHOLMOD when installed and the matrix is
+        positive definite, SuperLU otherwise. The environment variable
+        ``MVTK_SPARSE_BACKEND`` (one of these names) overrides ``"auto"``.
+    ordering : {"auto", "metis", "mmd"}
+        Ordering for SuperLU (see :func:`fill_reducing_ordering`); CHOLMOD orders itself.
 
     Returns
     -------
-    scipy.sparse.linalg.SuperLU
+    Factorization
         Use ``.solve(b)``.
 
     Raises
     ------
     ParameterError
-        If the matrix is singular (e.g. an unconstrained structure without a shift).
+        If the matrix is singular (e.g. an unconstrained structure without a shift), or
+        not positive definite with ``backend="cholmod"``.
+    MissingDependencyError
+        ``backend="cholmod"`` without ``sksparse-minimal`` installed.
     """
+    if backend not in BACKENDS:
+        raise ParameterError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if backend == "auto":
+        env = os.environ.get("MVTK_SPARSE_BACKEND", "auto")
+        if env not in BACKENDS:
+            raise ParameterError(
+                f"environment variable MVTK_SPARSE_BACKEND must be one of {BACKENDS}, "
+                f"got {env!r}")
+        backend = env
     A = sp.csc_matrix(A)
     if A.shape[0] != A.shape[1]:
         raise DimensionError(f"matrix must be square, got {A.shape}")
-    try:
-        return spla.splu(
-            A,
-            permc_spec="MMD_AT_PLUS_A",
-            diag_pivot_thresh=0.0,
-            options={"SymmetricMode": True},
+    if not A.has_sorted_indices:
+        A = A.sorted_indices()
+    chol = _cholmod_module() if backend in ("auto", "cholmod") else None
+    if backend == "cholmod" and chol is None:
+        raise MissingDependencyError(
+            "backend='cholmod' needs sksparse-minimal, which is not installed; install it "
+            'with: pip install "mvtk[cholmod]"'
         )
-    except RuntimeError as err:
-        raise ParameterError(
-            f"matrix of size {A.shape[0]} is singular: is the structure under-constrained "
-            "(rigid-body modes) or an element degenerate?"
-        ) from err
+    singular = (
+        f"matrix of size {A.shape[0]} is singular: is the structure under-constrained "
+        "(rigid-body modes) or an element degenerate?"
+    )
+    with _blas_limits():
+        if chol is not None and A.shape[0] > 1 and _positive_diagonal(A):
+            try:
+                with _quiet_c_output():
+                    f = chol(A)
+            except ValueError as err:   # "Matrix is not positive definite!"
+                if backend == "cholmod":
+                    raise ParameterError(
+                        f"matrix of size {A.shape[0]} is not positive definite "
+                        "(CHOLMOD): " + singular) from err
+            else:
+                # CHOLMOD may factorise a singular matrix with a round-off pivot; a solve
+                # round trip tells (then SuperLU decides, with its exact-zero pivots)
+                x0 = np.random.default_rng(1).standard_normal(A.shape[0])
+                x = f.solve_A(A @ x0)
+                if np.all(np.isfinite(x)) and (
+                        np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0)):
+                    return Factorization("cholmod", A.shape, f.solve_A)
+                if backend == "cholmod":
+                    raise ParameterError(singular)
+        elif backend == "cholmod":
+            raise ParameterError(
+                f"matrix of size {A.shape[0]} has a non-positive diagonal entry: not "
+                "positive definite, CHOLMOD cannot factorise it")
+        perm = fill_reducing_ordering(A, ordering)
+        try:
+            solve, lu = _superlu(A, perm)
+        except RuntimeError as err:
+            raise ParameterError(singular) from err
+    return Factorization("superlu", A.shape, solve, perm=perm, lu=lu)
 
 
-def _default_shift(K, M, singular_shift=None) -> tuple[float, spla.SuperLU | None]:
+@contextmanager
+def _quiet_c_output():
+    """Silence the C library's stdout/stderr (CHOLMOD prints "not positive definite"
+    warnings with printf, which would corrupt a CLI's output)."""
+    sys.stdout.flush()
+    sys.stderr.flush()
+    saved = []
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+    except OSError:
+        yield
+        return
+    try:
+        for fd in (1, 2):
+            try:
+                saved.append((fd, os.dup(fd)))
+                os.dup2(devnull, fd)
+            except OSError:
+                pass
+        yield
+    finally:
+        for fd, copy in saved:
+            os.dup2(copy, fd)
+            os.close(copy)
+        os.close(devnull)
+
+
+def _positive_diagonal(A) -> bool:
+    d = A.diagonal()
+    return bool(np.all(d > 0))
+
+
+def _default_shift(K, M, singular_shift=None, backend="auto") -> tuple[float, Factorization | None]:
     """Shift for :func:`eigsh_lowest`: 0 if K is safely invertible, else slightly negative.
 
     Returns the shift and, when it is 0, the factorisation of K (to be reused).
     """
     x0 = np.random.default_rng(0).standard_normal(K.shape[0])
     try:
-        lu = factorize(K)
+        lu = factorize(K, backend=backend)
+        if lu.backend == "cholmod":
+            return 0.0, lu    # factorize made the same round trip check already
         x = lu.solve(K @ x0)
-        piv = np.abs(lu.U.diagonal())
-        if (
-            piv.min() > 1e-12 * piv.max()
-            and np.all(np.isfinite(x))
-            and np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0)
-        ):
+        lu.n_solves = 0
+        # a singular K (rigid-body modes) factorises with round-off pivots, whose
+        # inverse amplifies the round-off of K x0 along the null space to O(|x0|)
+        if np.all(np.isfinite(x)) and np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0):
             return 0.0, lu
     except ParameterError:
         pass
-    if singular_shift is not None:
+    if callable(singular_shift):
+        singular_shift = singular_shift()
+    if singular_shift is not None and np.isfinite(singular_shift):
         return float(singular_shift), None
     mdiag = M.diagonal()
     ratio = K.diagonal()[mdiag > 0] / mdiag[mdiag > 0]
@@ -96,21 +467,62 @@ class EigenSolution:
         Eigenvalues omega^2 in (rad/s)^2, ascending.
     vectors : ndarray, shape (n_dof, n)
         Mass-normalised eigenvectors (``phi' M phi = I``).
+    n_factorizations : int
+        Sparse factorisations made (0 for the dense path).
+    n_solves : int
+        Solves with the factorisation inside the Lanczos iteration.
+    backend : str
+        Factorisation backend (``"superlu"``, ``"cholmod"`` or ``"dense"``).
     """
 
     omega2: np.ndarray
     vectors: np.ndarray
+    n_factorizations: int = 0
+    n_solves: int = 0
+    backend: str = ""
+
+
+def _start_vector(ndof: int, v0, M) -> np.ndarray:
+    """Deterministic Lanczos start vector, or one built from previous eigenvectors.
+
+    Without ``v0``: a fixed pseudo-random vector (seed 0), so the solve count and the
+    result do not change from run to run. With previous eigenvectors ``V`` (n_dof, k):
+    ``sum_j V_j / ||V_j||_M`` plus 1e-4 of the fixed vector, which keeps a component along
+    every mode (a mode of the new model missing from ``V`` is still found; tested).
+    """
+    base = np.random.default_rng(0).standard_normal(ndof)
+    if v0 is None:
+        return base
+    V = np.asarray(v0, dtype=float)
+    if V.ndim == 1:
+        V = V[:, None]
+    if V.ndim != 2 or V.shape[0] != ndof:
+        raise DimensionError(
+            f"v0 must have shape ({ndof},) or ({ndof}, k) (previous eigenvectors), got "
+            f"{np.shape(v0)}"
+        )
+    if not np.all(np.isfinite(V)):
+        raise ParameterError("v0 contains non-finite values")
+    norms = np.sqrt(np.abs(np.einsum("ij,ij->j", V, M @ V)))
+    norms[norms == 0] = 1.0
+    x = (V / norms).sum(axis=1)
+    nx = math.sqrt(abs(float(x @ (M @ x)))) or 1.0
+    nb = math.sqrt(abs(float(base @ (M @ base)))) or 1.0
+    return x / nx + 1e-4 * base / nb
 
 
 def eigsh_lowest(
-    K, M, n: int, sigma: float | None = None, tol: float = 0.0,
-    singular_shift: float | None = None,
+    K, M, n: int, sigma: float | None = None, tol: float | None = None,
+    singular_shift: float | None = None, v0: np.ndarray | None = None,
+    backend: str = "auto",
 ) -> EigenSolution:
     """Lowest ``n`` eigenpairs of the generalised symmetric problem by shift-invert.
 
-    One factorisation of ``K - sigma M`` is made and passed to ``eigsh`` as
-    ``OPinv``. For free-free structures pass a negative ``sigma`` (default: a small
-    negative shift scaled to the problem, so rigid-body modes are found too).
+    One factorisation of ``K - sigma M`` is made and passed to ARPACK's Lanczos
+    (``scipy.sparse.linalg.eigsh``) as ``OPinv``, with a deterministic start vector and
+    BLAS threads limited to :data:`BLAS_THREADS`. For free-free structures pass a
+    negative ``sigma`` (default: a small negative shift scaled to the problem, so
+    rigid-body modes are found too).
 
     Parameters
     ----------
@@ -125,24 +537,42 @@ def eigsh_lowest(
         (constrained structures: the fastest and most accurate choice) and a small
         negative shift ``-min((2 pi 0.5 Hz)^2, 1e-4 min_i(K_ii/M_ii))`` when it is
         singular (free-free structures; rigid-body modes then come out near zero).
-        Singularity is detected by the LU pivots and a solve round trip.
-    tol : float
-        Tolerance passed to ``eigsh`` (0 = machine precision).
-    singular_shift : float, optional
+        Singularity is detected by a solve round trip.
+    tol : float, optional
+        Relative accuracy requested for the eigenvalues: ARPACK stops when every Ritz
+        value ``theta`` of ``(K - sigma M)^-1 M`` has a residual below ``tol |theta|``,
+        which bounds the relative error of ``omega2 - sigma`` by ``tol`` (in practice
+        the error is quadratic in the residual, far smaller). Default
+        :data:`DEFAULT_TOL` = 1e-10 (frequencies to better than 1e-10); 0 = machine
+        precision (a few more solves).
+    singular_shift : float or callable, optional
         Shift to use instead of the default one when K turns out singular (a caller that
-        knows the scale of the first elastic mode, e.g. from a trial field, passes it).
+        knows the scale of the first elastic mode, e.g. from a trial field, passes it),
+        or a function returning it (or None / nan for the default), called only then.
+    v0 : ndarray, shape (n_dof,) or (n_dof, k), optional
+        Warm start: eigenvectors of a nearby model (model updating, Monte Carlo,
+        parameter studies). The Lanczos start vector is built from them (see
+        :func:`_start_vector`), which cuts the number of solves.
+    backend : {"auto", "superlu", "cholmod"}
+        See :func:`factorize`.
 
     Returns
     -------
     EigenSolution
     """
-    K = sp.csc_matrix(K)
-    M = sp.csc_matrix(M)
+    # CSR or CSC: M is only multiplied, K factorised (and converted there)
+    K = K if sp.issparse(K) and K.format in ("csr", "csc") else sp.csr_matrix(K)
+    M = M if sp.issparse(M) and M.format in ("csr", "csc") else sp.csr_matrix(M)
     ndof = K.shape[0]
     if K.shape != M.shape or K.shape[0] != K.shape[1]:
         raise DimensionError(f"K {K.shape} and M {M.shape} must be square and equal")
     if not 1 <= n <= ndof:
         raise ParameterError(f"number of modes must be in 1..{ndof}, got {n}")
+    if tol is None:
+        tol = DEFAULT_TOL
+    if not (np.isfinite(tol) and 0 <= tol < 1):
+        raise ParameterError(f"tol must be in [0, 1), got {tol!r}")
+    n_fact, n_solves, used = 0, 0, "dense"
     if n >= ndof - 1:
         import scipy.linalg as sla
 
@@ -151,25 +581,173 @@ def eigsh_lowest(
     else:
         lu = None
         if sigma is None:
-            sigma, lu = _default_shift(K, M, singular_shift)
+            sigma, lu = _default_shift(K, M, singular_shift, backend)
+            n_fact += 1
         if lu is None:
-            lu = factorize(K - sigma * M)
+            lu = factorize(K - sigma * M, backend=backend)
+            n_fact += 1
+        used = lu.backend
         opinv = spla.LinearOperator((ndof, ndof), matvec=lu.solve, dtype=float)
+        # assembled shell matrices store the zeros of uncoupled DOF pairs (membrane and
+        # bending of a flat element): drop them for the ~2 n_solves products with M
+        if M.nnz and np.count_nonzero(M.data) < 0.9 * M.nnz:
+            M = M.copy()
+            M.eliminate_zeros()
+        start = _start_vector(ndof, v0, M)
         try:
-            w, v = spla.eigsh(
-                K, k=n, M=M, sigma=sigma, which="LM", OPinv=opinv, tol=tol,
-                ncv=min(ndof, max(2 * n + 1, 20)),
-            )
+            with _blas_limits():
+                w, v = spla.eigsh(
+                    K, k=n, M=M, sigma=sigma, which="LM", OPinv=opinv, tol=tol,
+                    ncv=min(ndof, max(2 * n + 1, 20)), v0=start,
+                )
         except spla.ArpackNoConvergence as err:
             raise ConvergenceError(
                 f"eigsh did not converge for {n} modes of a {ndof}-DOF model"
             ) from err
+        n_solves = lu.n_solves
         order = np.argsort(w)
         w, v = w[order], v[:, order]
     # mass-normalise explicitly (eigsh returns M-orthonormal vectors already, up to
     # round-off; the dense path does too, but be explicit and fix a sign convention)
     mnorm = np.sqrt(np.einsum("ij,ij->j", v, M @ v))
     v = v / mnorm
+    if used != "dense":
+        # Rayleigh quotients: their error is quadratic in the eigenvector residual, while
+        # the Ritz values of the shift-inverted operator carry the factorisation's
+        # round-off (a few 1e-9 on an ill-conditioned shell model, and different for each
+        # backend and ordering; the Rayleigh quotients agree across them to 2e-10)
+        w = np.einsum("ij,ij->j", v, K @ v)
+        order = np.argsort(w, kind="stable")
+        w, v = w[order], v[:, order]
     big = np.argmax(np.abs(v), axis=0)
     v = v * np.sign(v[big, np.arange(v.shape[1])])
-    return EigenSolution(omega2=w, vectors=v)
+    return EigenSolution(omega2=w, vectors=v, n_factorizations=n_fact, n_solves=n_solves,
+                         backend=used)
+
+
+@dataclass(frozen=True)
+class MemoryEstimate:
+    """Memory needed by :func:`eigsh_lowest` (bytes), from :func:`estimate_eigen_memory`.
+
+    Attributes
+    ----------
+    n_dof : int
+    nnz_matrix : int
+        Stored entries of K (M has the same pattern).
+    nnz_factor : int
+        Predicted entries stored by SuperLU (``Factorization.nnz_storage``) with the
+        METIS ordering: its supernodal L and U including the zeros inside node blocks
+        (about twice the numerically nonzero ``nnz_factor`` for a flat shell).
+    matrices : int
+        Bytes of K and M themselves (CSR), held by the model before the solve.
+    solve : int
+        Bytes the eigen step adds on top: SuperLU's storage
+        (:data:`FACTOR_BYTES_PER_NNZ` per stored entry), two working copies of K
+        (CSC and permuted) and the Lanczos basis and returned vectors.
+    total : int
+        ``matrices + solve``.
+    """
+
+    n_dof: int
+    nnz_matrix: int
+    nnz_factor: int
+    matrices: int
+    solve: int
+    total: int
+
+    @property
+    def total_gib(self) -> float:
+        return self.total / 2**30
+
+    def to_dataframe(self):
+        """One row per component (``part``, ``bytes``, ``GiB``)."""
+        import pandas as pd
+
+        parts = {"matrices": self.matrices, "solve": self.solve, "total": self.total}
+        return pd.DataFrame({"part": list(parts), "bytes": list(parts.values()),
+                             "GiB": [v / 2**30 for v in parts.values()]})
+
+
+#: Bytes per entry stored by SuperLU (8-byte value, 4-byte row index); with the other
+#: terms of :class:`MemoryEstimate` this over-predicts the measured resident-memory
+#: growth of the eigen step of 22 000- and 49 000-DOF shell plates by 5-15 %.
+FACTOR_BYTES_PER_NNZ = 12.0
+
+
+def estimate_eigen_memory(
+    A, n_modes: int, dofs_per_vertex: int | np.ndarray = 1,
+) -> MemoryEstimate:
+    """Predict the memory of :func:`eigsh_lowest` (SuperLU backend) before running it.
+
+    The fill of the factor is computed exactly for the METIS ordering that
+    :func:`factorize` uses, by factorising a diagonally dominant proxy with the pattern
+    of the compressed graph (one vertex per group of DOFs with identical sparsity,
+    e.g. a node), whose cost is about ``1/b^3`` of the real factorisation for ``b``
+    DOFs per vertex; each vertex-level entry stands for a ``b_i x b_j`` block.
+    CHOLMOD (``backend="cholmod"``) stores only L and needs about 2/3 of this.
+
+    Parameters
+    ----------
+    A : sparse matrix
+        Either the stiffness matrix (its pattern), with ``dofs_per_vertex=1``, or the
+        node adjacency graph of the mesh (an entry per pair of nodes that share an
+        element) with ``dofs_per_vertex`` = free DOFs per node, which needs no
+        assembly. Both give the same prediction for the same mesh.
+    n_modes : int
+        Number of modes to be computed.
+    dofs_per_vertex : int or ndarray
+        DOFs of each vertex of ``A`` (scalar or one value per vertex).
+
+    Returns
+    -------
+    MemoryEstimate
+    """
+    A = sp.csc_matrix(A)
+    if A.shape[0] != A.shape[1]:
+        raise DimensionError(f"matrix must be square, got {A.shape}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 1:
+        raise ParameterError(f"n_modes must be a positive integer, got {n_modes!r}")
+    nv = A.shape[0]
+    size = np.asarray(dofs_per_vertex, dtype=np.int64)
+    if size.ndim > 1 or (size.ndim == 1 and len(size) != nv):
+        raise DimensionError(
+            f"dofs_per_vertex must be a scalar or have shape ({nv},), got {size.shape}")
+    size = np.broadcast_to(size, (nv,)).copy()
+    if np.any(size < 0):
+        raise ParameterError("dofs_per_vertex must be >= 0")
+    # structure only, symmetric, with a diagonal
+    G = sp.csc_matrix((np.ones(A.nnz), A.indices, A.indptr), shape=A.shape)
+    G = (G + G.T + sp.eye(nv, format="csc")).tocsc()
+    G.sort_indices()
+    if np.all(size == 1):
+        group = _supervariables(G)
+        ng = int(group[-1]) + 1
+        first = np.searchsorted(group, np.arange(ng))
+        size = np.diff(np.r_[first, nv])
+        G = G[first][:, first].tocsc()
+    keep = np.flatnonzero(size > 0)
+    if len(keep) < nv:
+        G, size = G[keep][:, keep].tocsc(), size[keep]
+    n_dof = int(size.sum())
+    Gc = G.tocoo()
+    nnz_matrix = int(np.sum(size[Gc.row] * size[Gc.col]))
+    deg = np.diff(G.indptr)
+    proxy = (-G).tocsc()
+    proxy.setdiag(deg + 1.0)
+    proxy.sort_indices()
+    perm = fill_reducing_ordering(proxy, "metis") if G.shape[0] >= 64 else None
+    with _blas_limits():
+        _, lu = _superlu(proxy, perm)
+    s = size if perm is None else size[perm]
+    L, U = lu.L.tocoo(), lu.U.tocoo()
+    off_l = L.row != L.col
+    off_u = U.row != U.col
+    nnz_factor = int(np.sum(s[L.row[off_l]] * s[L.col[off_l]])
+                     + np.sum(s[U.row[off_u]] * s[U.col[off_u]])
+                     + np.sum(s * s + s))
+    ncv = min(n_dof, max(2 * n_modes + 1, 20))
+    matrices = 2 * (nnz_matrix * 12 + (n_dof + 1) * 4)
+    solve = (int(FACTOR_BYTES_PER_NNZ * nnz_factor) + 2 * nnz_matrix * 12
+             + (ncv + 3 * n_modes + 6) * n_dof * 8)
+    return MemoryEstimate(n_dof=n_dof, nnz_matrix=nnz_matrix, nnz_factor=nnz_factor,
+                          matrices=matrices, solve=solve, total=matrices + solve)

@@ -139,6 +139,7 @@ class _Problem:
         self.one_sided: set[str] = set()
         self._cache: _State | None = None
         self._lowest: float | None = None
+        self._vectors = None  # last eigenvectors: warm start of the next eigen solve
 
     # -------------------------------------------------------------- helpers
     def to_x(self, p_free: np.ndarray) -> np.ndarray:
@@ -195,7 +196,11 @@ class _Problem:
         if lowest is None:
             lowest = (TWO_PI * float(self.ft.min())) ** 2
         sigma = -0.1 * lowest if lowest > 0 else None
-        eig = eigsh_lowest(model.K, model.M, n, sigma=sigma)
+        v0 = self._vectors
+        if v0 is not None and v0.shape[0] != model.n_dof:
+            v0 = None
+        eig = eigsh_lowest(model.K, model.M, n, sigma=sigma, v0=v0)
+        self._vectors = eig.vectors
         if eig.omega2[0] > 0:
             self._lowest = float(eig.omega2[0])
         self.timing["eigen_s"] += time.perf_counter() - t0
