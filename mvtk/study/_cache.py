@@ -122,8 +122,10 @@ class ReadTracker:
     fact that it is a table or absent), ``"full"`` (the whole subtree, for iteration),
     ``"keys"`` (the key names of a table), ``"truth"`` (whether it is non-empty),
     ``"structure"`` (the structure description), ``"measurement_file"`` (the SHA-256 of
-    the file of a test, so a moved copy of the same data still matches) or ``"file"``
-    (the SHA-256 of a file, ``path`` = its resolved name).
+    the file of a test, so a moved copy of the same data still matches),
+    ``"extra_file"`` (whether a further input such as ``modal_geometry`` is named),
+    ``"extra_file_content"`` (its SHA-256, by name like the measurement files) or
+    ``"file"`` (the SHA-256 of a file, ``path`` = its resolved name).
     """
 
     def __init__(self, study) -> None:
@@ -141,6 +143,13 @@ class ReadTracker:
             return {"name": p.name, "sha256": _file_sha256(p)}
         if kind == "structure":
             return to_jsonable(self.study.structure)
+        if kind == "extra_file":
+            return path[0] in getattr(self.study, "extra_files", {})
+        if kind == "extra_file_content":  # by content, wherever the study says it is
+            p = getattr(self.study, "extra_files", {}).get(path[0])
+            if p is None or not p.is_file():
+                return _ABSENT
+            return {"name": p.name, "sha256": _file_sha256(p)}
         node: Any = self.study.config
         for part in path:
             if isinstance(node, Mapping) and part in node:
@@ -242,10 +251,16 @@ class TrackedStudy:
             self._tracker.record("file", (str(f),))
         return f
 
+    def has_extra_file(self, name: str) -> bool:
+        """Whether the study names the further input file ``name`` (the fact is recorded,
+        not the path as written, so a study moved with its files keeps its cache)."""
+        self._tracker.record("extra_file", (name,))
+        return name in self._study.extra_files
+
     def extra_file(self, name: str) -> Path:
         """A further input file of the study (e.g. ``"modal_file"``), its content recorded."""
         p = self._study.extra_files[name]
-        self._tracker.record("file", (str(p),))
+        self._tracker.record("extra_file_content", (name,))
         return p
 
     @property

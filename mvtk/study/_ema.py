@@ -110,8 +110,8 @@ def geometry_of(study, modal_arrays):
     shapes = _shapes(modal_arrays)
     sensors = sorted({(int(n), str(d)) for n, d in zip(shapes["node"].values,
                                                        shapes["direction"].values)})
-    source = study.extra_file("modal_geometry") if study.section("modal").get(
-        "geometry") is not None else study.extra_file("modal_file")
+    source = (study.extra_file("modal_geometry") if study.has_extra_file("modal_geometry")
+              else study.extra_file("modal_file"))
     return read_test_geometry(source, sensors=sensors)
 
 

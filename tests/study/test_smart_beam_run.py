@@ -184,8 +184,8 @@ def test_changing_a_controller_gain_reruns_only_the_control_stage(out_dir, tmp_p
     run(STUDY, out_dir, progress=False, report=False)
     res = run(variant, out_dir, progress=False)
     assert res.ok
-    assert set(res.cache_hits) == {"ingest", "fe", "damping", "updating", "uncertainty",
-                                   "reduction"}
+    assert set(res.cache_hits) == {"ingest", "modal", "fe", "damping", "updating",
+                                   "correlation", "uncertainty", "reduction"}
     assert "control" not in res.cache_hits
 
 
