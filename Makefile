@@ -37,7 +37,7 @@ bench: $(STAMP)
 docs: $(STAMP)
 	rm -rf docs/_build/html
 	$(BIN)/python -m sphinx -b html -W --keep-going -q docs docs/_build/html
-	$(BIN)/python docs/check_site.py docs/_build/html
+	$(BIN)/python docs/check_site.py docs/_build/html --screenshot tests/artifacts/docs_index.png
 
 clean:
 	rm -rf $(VENV) reports/*/ .pytest_cache docs/_build docs/_generated

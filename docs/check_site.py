@@ -99,10 +99,42 @@ def check_api(root: Path) -> list[str]:
     return problems
 
 
+def screenshot(site: Path, png: Path) -> Path | None:
+    """A 1400 x 1800 px screenshot of the site's first page with headless Chromium.
+
+    Returns None (and says why) when no Chromium is installed: the screenshot is an
+    artifact for people, not a check.
+    """
+    import shutil
+    import subprocess
+    import tempfile
+
+    exe = next((shutil.which(n) for n in ("chromium", "chromium-browser", "google-chrome")
+                if shutil.which(n)), None)
+    if exe is None:
+        print("check_site: no chromium on PATH; no screenshot taken")
+        return None
+    png.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as profile:
+        cmd = [exe, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic",
+               "--no-first-run", "--disable-background-networking",
+               "--disable-component-update", "--disable-sync", f"--user-data-dir={profile}",
+               "--window-size=1400,1800", f"--screenshot={png}",
+               (site / "index.html").resolve().as_uri()]
+        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+    if not png.is_file():
+        print(f"check_site: chromium wrote no screenshot to {png}")
+        return None
+    print(f"check_site: screenshot of the first page: {png}")
+    return png
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("site", type=Path, help="built HTML folder (docs/_build/html)")
     parser.add_argument("--external", action="store_true", help="list external links")
+    parser.add_argument("--screenshot", type=Path, default=None,
+                        help="also save a PNG of the first page (needs chromium)")
     args = parser.parse_args(argv)
     if not (args.site / "index.html").is_file():
         print(f"check_site: {args.site} has no index.html; build the docs first",
@@ -114,6 +146,8 @@ def main(argv: list[str] | None = None) -> int:
         print("\n".join(external))
     for p in problems:
         print(p, file=sys.stderr)
+    if args.screenshot is not None:
+        screenshot(args.site, args.screenshot)
     n_pages = sum(1 for _ in args.site.rglob("*.html"))
     print(f"check_site: {n_pages} pages, {len(problems)} problem(s), "
           f"{len(external)} external link(s) not followed")
