@@ -133,7 +133,8 @@ def test_size_estimate_matches_a_small_model_and_huge_meshes_are_refused_at_once
     assert (est.n_nodes, est.n_elements, est.n_dof) == (model.n_nodes, model.n_elements,
                                                         model.n_dof)
     assert est.nnz == model.K.nnz
-    assert 0.5 < est.bytes / peak < 2.0
+    # an upper bound: the node-graph assembly peaks at about a third of it
+    assert 0.5 < est.bytes / peak < 4.0
     t0 = time.perf_counter()
     with pytest.raises(ParameterError, match=r"200030001 nodes, 200000000 elements and "
                        r"1200180006 DOFs .*element_size=1e-05.*estimated assembly memory "
