@@ -547,8 +547,8 @@ def eigsh_lowest(
         value ``theta`` of ``(K - sigma M)^-1 M`` has a residual below ``tol |theta|``,
         which bounds the relative error of ``omega2 - sigma`` by ``tol`` (in practice
         the error is quadratic in the residual, far smaller). Default
-        :data:`DEFAULT_TOL` = 1e-10 (frequencies to better than 1e-10); 0 = machine
-        precision (a few more solves).
+        :data:`DEFAULT_TOL` = 0, machine precision: a looser tolerance saves a few solves
+        but can stop before every copy of a repeated eigenvalue has emerged.
     singular_shift : float or callable, optional
         Shift to use instead of the default one when K turns out singular (a caller that
         knows the scale of the first elastic mode, e.g. from a trial field, passes it),

@@ -123,11 +123,11 @@ def test_warm_start_gives_same_modes_with_fewer_or_equal_solves(plate):
     prev = fe.eigsh_lowest(plate.K, plate.M, 8)
     cold = fe.eigsh_lowest(near.K, near.M, 8)
     warm = fe.eigsh_lowest(near.K, near.M, 8, v0=prev.vectors)
-    np.testing.assert_allclose(warm.omega2, cold.omega2, rtol=1e-10)
+    np.testing.assert_allclose(warm.omega2, cold.omega2, rtol=1e-8)
     assert warm.n_solves <= cold.n_solves
     # a warm start missing modes (only the first 3 of 8) still finds all 8
     part = fe.eigsh_lowest(near.K, near.M, 8, v0=prev.vectors[:, :3])
-    np.testing.assert_allclose(part.omega2, cold.omega2, rtol=1e-10)
+    np.testing.assert_allclose(part.omega2, cold.omega2, rtol=1e-8)
 
 
 def test_eigsh_bad_input(plate):
