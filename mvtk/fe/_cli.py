@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 __all__ = ["add_parser"]
 
@@ -28,10 +29,11 @@ def run(args: argparse.Namespace) -> int:
     """Run ``mvtk modes``; returns the exit code (errors propagate as MvtkError)."""
     from ..study._text import read_toml
     from ._modal import modal_analysis
-    from ._structure import build_model
+    from ._structure import build_model, resolve_mesh_file
 
     # UTF-8, UTF-8 with BOM or UTF-16 with BOM; a clear error naming the byte otherwise
-    model = build_model(read_toml(args.structure, "structure file"))
+    model = build_model(resolve_mesh_file(read_toml(args.structure, "structure file"),
+                                          Path(args.structure).resolve().parent))
     res = modal_analysis(model, args.n_modes)
     if args.json:
         out = {

@@ -124,6 +124,17 @@ __all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "const
 _ORTHO_KEYS = ("E1", "E2", "G12", "G13", "G23", "nu12", "rho")
 
 
+def resolve_mesh_file(desc: dict, base_dir: str | Path) -> dict:
+    """Make a relative ``[mesh] file`` absolute, relative to ``base_dir`` (the folder of
+    the structure TOML that names it), so the description works from any directory."""
+    mesh = desc.get("mesh")
+    if isinstance(mesh, dict) and isinstance(mesh.get("file"), str):
+        f = Path(mesh["file"])
+        if not f.is_absolute():
+            mesh["file"] = str((Path(base_dir) / f).resolve())
+    return desc
+
+
 def load_structure(path: str | Path) -> dict:
     """Read a structure TOML file into a dict.
 
@@ -135,7 +146,7 @@ def load_structure(path: str | Path) -> dict:
     path = Path(path)
     try:
         with path.open("rb") as fh:
-            return tomllib.load(fh)
+            return resolve_mesh_file(tomllib.load(fh), path.parent)
     except FileNotFoundError:
         raise ConfigError(f"structure file {str(path)!r} not found") from None
     except tomllib.TOMLDecodeError as err:

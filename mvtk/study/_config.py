@@ -156,7 +156,10 @@ def load_study(path: str | Path) -> Study:
         cfg = {k: v for k, v in cfg.items() if k not in tables}
     else:
         structure_file = _file(root, cfg["structure"]["file"], "structure")
-        structure = read_toml(structure_file, "structure file")
+        from ..fe._structure import resolve_mesh_file
+
+        structure = resolve_mesh_file(read_toml(structure_file, "structure file"),
+                                      structure_file.parent)
 
     files: dict[str, Path] = {}
     meas = cfg.get("measurements", {})

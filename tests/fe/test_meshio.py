@@ -211,3 +211,20 @@ def test_abaqus_inp_element_and_node_sets(tmp_path):
     ref = plate_model(0.3, 0.2, [Ply(STEEL, 1e-3)], nx=6, ny=4, clamp="x0")
     np.testing.assert_allclose(modal_analysis(model, 3).fn_hz, modal_analysis(ref, 3).fn_hz,
                                rtol=1e-8)
+
+
+def test_mesh_file_is_found_relative_to_the_structure_file_from_any_directory(
+        tmp_path, monkeypatch, capsys):
+    """`mvtk modes data/structures/curved_panel/curved_panel.toml` from the repository
+    root refused the project's own example (the mesh path was taken relative to the
+    working directory)."""
+    from pathlib import Path
+
+    from mvtk.cli import main
+
+    toml = (Path(__file__).resolve().parents[2] / "data" / "structures" / "curved_panel"
+            / "curved_panel.toml")
+    monkeypatch.chdir(tmp_path)
+    assert main(["modes", str(toml), "-n", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "in-plane" in out or "bending" in out, out
