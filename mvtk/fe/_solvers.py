@@ -379,7 +379,10 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
                 x = f.solve_A(A @ x0)
                 if np.all(np.isfinite(x)) and (
                         np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0)):
-                    return Factorization("cholmod", A.shape, f.solve_A)
+                    # CHOLMOD's binding takes C-ordered right-hand sides only
+                    return Factorization(
+                        "cholmod", A.shape,
+                        lambda b: f.solve_A(np.ascontiguousarray(b)))
                 if backend == "cholmod":
                     raise ParameterError(singular)
         elif backend == "cholmod":

@@ -56,6 +56,9 @@ def test_factorize_solves(plate, backend, rng):
     np.testing.assert_allclose(lu.solve(b[:, 0]), x[:, 0], rtol=0,
                                atol=1e-9 * np.abs(x).max())
     assert lu.n_solves == 3
+    # a transposed (Fortran-ordered) right-hand side, as K^-1 C' builds it
+    np.testing.assert_allclose(lu.solve(np.asfortranarray(b)), x, rtol=0,
+                               atol=1e-9 * np.abs(x).max())
     with pytest.raises(DimensionError, match=r"right-hand side must have shape \(1632,\)"):
         lu.solve(np.ones(5))
 
