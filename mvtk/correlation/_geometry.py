@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .._interrupt import deferred_interrupt
 from ..errors import (
     ConfigError,
     DimensionError,
@@ -638,8 +639,9 @@ def _from_uff(path: Path, scale: float) -> TestGeometry:
     except ImportError as err:  # pragma: no cover - pyuff is a base dependency
         raise MissingDependencyError("reading UFF geometry needs pyuff: pip install pyuff") from err
     try:
-        uff = pyuff.UFF(str(path))
-        types = [int(t) for t in uff.get_set_types()]
+        with deferred_interrupt():
+            uff = pyuff.UFF(str(path))
+            types = [int(t) for t in uff.get_set_types()]
     except Exception as err:
         raise FormatError(f"{path}: not a readable UFF file ({type(err).__name__}: {err})"
                           ) from err
@@ -648,7 +650,8 @@ def _from_uff(path: Path, scale: float) -> TestGeometry:
         if t not in (15, 18, 82, 2411, 2412):
             continue
         try:
-            recs.append((i + 1, t, uff.read_sets(i)))
+            with deferred_interrupt():
+                recs.append((i + 1, t, uff.read_sets(i)))
         except Exception as err:
             raise FormatError(f"{path}, record {i + 1} (dataset {t}): could not be parsed "
                               f"({type(err).__name__}: {err})") from err

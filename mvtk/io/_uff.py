@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .._interrupt import deferred_interrupt
 from ..errors import (
     DataRepairWarning,
     FormatError,
@@ -368,8 +369,9 @@ def read_uff(path: Path, *, allow_truncated: bool = False):
     except ImportError as err:  # pragma: no cover - pyuff is a base dependency
         raise MissingDependencyError("reading UFF needs pyuff: pip install pyuff") from err
     try:
-        uff = pyuff.UFF(str(path))
-        types = [int(t) for t in uff.get_set_types()]
+        with deferred_interrupt():
+            uff = pyuff.UFF(str(path))
+            types = [int(t) for t in uff.get_set_types()]
     except Exception as err:
         raise FormatError(
             f"{path}: not a readable UFF file ({type(err).__name__}: {err}); expected "
@@ -395,7 +397,8 @@ def read_uff(path: Path, *, allow_truncated: bool = False):
             )
             continue
         try:
-            rec = uff.read_sets(i)
+            with deferred_interrupt():
+                rec = uff.read_sets(i)
         except Exception as err:
             raise FormatError(
                 f"{path}, record {index} (dataset {set_type}): could not be parsed "
