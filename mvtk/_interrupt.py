@@ -1,10 +1,17 @@
-"""Keep Ctrl-C a Ctrl-C through third-party code that swallows it.
+"""Keep Ctrl-C a Ctrl-C through code that swallows it.
 
-pyuff wraps every failure of a record read, ``KeyboardInterrupt`` included (bare
-``except:``), into a generic ``Exception("Error when reading data-set(s).")``; an
-interrupted run would then be reported as a corrupt file. :func:`deferred_interrupt`
-holds SIGINT back for the duration of such a call and raises ``KeyboardInterrupt``
-right after it.
+Two ways an interrupt gets lost in a long run:
+
+* third-party code catches everything: pyuff wraps every failure of a record read,
+  ``KeyboardInterrupt`` included (bare ``except:``), into a generic
+  ``Exception("Error when reading data-set(s).")``, so an interrupted run would be
+  reported as a corrupt file. :func:`deferred_interrupt` holds SIGINT back for the
+  duration of such a call and delivers it right after.
+* Python itself drops an exception raised inside a weakref callback or ``__del__``
+  ("Exception ignored in ..."): a SIGINT that lands there vanishes and the run goes on.
+  :func:`interrupt_latch` remembers every SIGINT, and :func:`check_interrupt` raises
+  ``KeyboardInterrupt`` again at the next safe point (between pipeline stages, at the end
+  of a command) if one was received.
 """
 
 from __future__ import annotations
@@ -13,18 +20,52 @@ import contextlib
 import signal
 import threading
 
-__all__ = ["deferred_interrupt"]
+__all__ = ["check_interrupt", "deferred_interrupt", "interrupt_latch"]
+
+_received = threading.Event()
+
+
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+@contextlib.contextmanager
+def interrupt_latch():
+    """SIGINT raises ``KeyboardInterrupt`` as usual and is also remembered for
+    :func:`check_interrupt`. A no-op outside the main thread."""
+    if not _main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        _received.set()
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGINT, handler)
+    _received.clear()
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        _received.clear()
+
+
+def check_interrupt() -> None:
+    """Raise ``KeyboardInterrupt`` if a SIGINT was received inside :func:`interrupt_latch`
+    (whether or not the code that was running let it through)."""
+    if _received.is_set():
+        raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
 def deferred_interrupt():
-    """Defer SIGINT until the block ends, then raise ``KeyboardInterrupt``.
+    """Defer SIGINT until the block ends, then deliver it (``KeyboardInterrupt``).
 
-    A no-op outside the main thread or when SIGINT has a handler other than Python's
-    default (the caller then owns the signal).
+    A no-op outside the main thread or when SIGINT is not handled by Python (ignored,
+    or the default C action).
     """
-    if (threading.current_thread() is not threading.main_thread()
-            or signal.getsignal(signal.SIGINT) is not signal.default_int_handler):
+    previous = signal.getsignal(signal.SIGINT) if _main_thread() else None
+    if not callable(previous):
         yield
         return
     received = []
@@ -32,6 +73,7 @@ def deferred_interrupt():
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.signal(signal.SIGINT, previous)
         if received:
-            raise KeyboardInterrupt
+            previous(signal.SIGINT, None)
+            raise KeyboardInterrupt  # the previous handler did not raise

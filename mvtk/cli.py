@@ -30,6 +30,7 @@ import os
 import sys
 
 from . import __version__
+from ._interrupt import check_interrupt, interrupt_latch
 from .errors import MvtkError
 
 #: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
@@ -87,7 +88,10 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     prog = f"mvtk {args.command}"
     try:
-        return int(args.func(args) or 0)
+        with interrupt_latch():
+            status = int(args.func(args) or 0)
+            check_interrupt()  # received, but swallowed where Python cannot raise it
+        return status
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130

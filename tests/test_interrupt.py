@@ -31,3 +31,23 @@ def test_no_signal_no_effect():
         x = 1
     assert x == 1
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_latch_raises_an_interrupt_that_was_swallowed():
+    """Python drops an exception raised in a weakref callback or __del__ ("Exception
+    ignored in ..."); the latch remembers the SIGINT and check_interrupt raises it."""
+    from mvtk._interrupt import check_interrupt, interrupt_latch
+
+    with interrupt_latch():
+        check_interrupt()  # nothing received yet
+        try:
+            os.kill(os.getpid(), signal.SIGINT)
+        except KeyboardInterrupt:
+            pass  # swallowed, as Python does inside a weakref callback
+        with pytest.raises(KeyboardInterrupt):
+            check_interrupt()
+        # deferral inside the latch still delivers through the latch's handler
+        with pytest.raises(KeyboardInterrupt), deferred_interrupt():
+            os.kill(os.getpid(), signal.SIGINT)
+    check_interrupt()  # cleared when the latch ends
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from .._interrupt import check_interrupt
 from ..errors import ConfigError, MvtkError
 from ._cache import OutputLock, ReadTracker, StageCache, TrackedStudy, code_hash, stage_key
 from ._config import Study, load_study
@@ -257,6 +258,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
     def do(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
         if name not in selected:
             return
+        check_interrupt()
         bar.set_postfix_str(name)
         t0 = time.perf_counter()
         try:
@@ -276,6 +278,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
                 res, ds = cache.get(name, key, lambda: compute(TrackedStudy(study, tracker)),
                                     tracker)
             except MvtkError as err:
+                check_interrupt()  # an interrupt that library code turned into an error
                 failed[name] = str(err)
                 return
             except ImportError as err:
@@ -284,10 +287,12 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
             except (KeyboardInterrupt, SystemExit):
                 raise
             except Exception as err:  # noqa: BLE001 - recorded, shown in the report
+                check_interrupt()
                 tb = traceback.extract_tb(err.__traceback__)[-1]
                 failed[name] = (f"internal error {type(err).__name__}: {err} "
                                 f"(at {Path(tb.filename).name}:{tb.lineno}); please report it")
                 return
+            check_interrupt()  # one that was swallowed (weakref callback, bare except)
             results[name] = res
             if ds is not None:
                 arrays[name] = ds

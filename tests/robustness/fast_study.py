@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from study_text import with_absolute_paths
+
 ROOT = Path(__file__).resolve().parents[2]
 STUDY = ROOT / "data" / "smart_beam" / "study.toml"
 STRUCTURE = ROOT / "data" / "structures" / "smart_beam.toml"
@@ -34,10 +36,7 @@ def write_fast_study(folder: Path, replace: dict[str, str] | None = None) -> Pat
     for old, new in (*_REPLACE, *(replace or {}).items()):
         assert old in text, old
         text = text.replace(old, new)
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
-                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
-        text = text.replace(f'"{name}"', f'"{(STUDY.parent / name).as_posix()}"')
+    text = with_absolute_paths(text)
     path = folder / "study.toml"
     path.write_text(text, encoding="utf-8")
     return path

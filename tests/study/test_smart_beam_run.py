@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pandas as pd
 import pytest
+from study_text import with_absolute_paths
 
 from mvtk.cli import main
 from mvtk.study import run
@@ -166,14 +167,7 @@ def test_monte_carlo_uncertainty_section(out_dir):
 
 
 def test_changing_a_controller_gain_reruns_only_the_control_stage(out_dir, tmp_path):
-    text = STUDY.read_text()
-    base = STUDY.parent
-    text = text.replace('"../structures/smart_beam.toml"',
-                        f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
-                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
-        text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
+    text = with_absolute_paths(STUDY.read_text())
     old = "gain = 0.1                # dimensionless"
     assert old in text
     variant = tmp_path / "study.toml"

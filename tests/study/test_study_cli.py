@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import pytest
+from study_text import with_absolute_paths
 
 from mvtk.cli import main
 
@@ -75,10 +76,7 @@ def test_utf16_study_is_read(tmp_path, capsys):
     """Issue 16: a UTF-16 study file gave a raw traceback; it is now read (here it then
     stops on a deliberate unknown key, showing the text was decoded)."""
     text = STUDY.read_text(encoding="utf-8").replace("n_modes = 6", "n_mode = 6")
-    text = text.replace('"../structures/smart_beam.toml"', f'"{STRUCTURE.as_posix()}"')
-    for name in ("impact", "decay", "broadband"):
-        f = f"SYNTHETIC_smart_beam_{name}.csv"
-        text = text.replace(f'"{f}"', f'"{(STUDY.parent / f).as_posix()}"')
+    text = with_absolute_paths(text)
     p = tmp_path / "study.toml"
     p.write_bytes("\ufeff".encode("utf-16-le") + text.encode("utf-16-le"))
     assert main(["reduce", str(p)]) == 2

@@ -3,6 +3,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from study_text import with_absolute_paths
 
 from mvtk.errors import ConfigError
 from mvtk.study import load_study
@@ -28,14 +29,7 @@ def _variant(tmp_path, old: str, new: str) -> Path:
     """A copy of the smart-beam study with one text replacement, paths made absolute."""
     text = STUDY.read_text()
     assert old in text, old
-    text = text.replace(old, new)
-    base = STUDY.parent
-    text = text.replace('"../structures/smart_beam.toml"',
-                        f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
-                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
-        text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
+    text = with_absolute_paths(text.replace(old, new))
     p = tmp_path / "study.toml"
     p.write_text(text)
     return p

@@ -8,6 +8,7 @@ import re
 from pathlib import Path
 
 import pytest
+from study_text import with_absolute_paths
 
 from mvtk.errors import ConfigError
 from mvtk.study import CONTROLLER_SCHEMAS, SCHEMA, load_study
@@ -20,13 +21,7 @@ def _absolute_copy(tmp_path: Path, text: str | None = None, encoding: str = "utf
                    bom: bytes = b"") -> Path:
     """The smart-beam study with absolute paths, written in ``encoding``."""
     text = STUDY.read_text(encoding="utf-8") if text is None else text
-    base = STUDY.parent
-    text = text.replace('"../structures/smart_beam.toml"',
-                        f'"{(base.parent / "structures" / "smart_beam.toml").as_posix()}"')
-    for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
-                 "SYNTHETIC_smart_beam_broadband.csv", "SYNTHETIC_smart_beam_scan.uff",
-                 "SYNTHETIC_smart_beam_scan_geometry.csv"):
-        text = text.replace(f'"{name}"', f'"{(base / name).as_posix()}"')
+    text = with_absolute_paths(text)
     p = tmp_path / "study.toml"
     p.write_bytes(bom + text.encode(encoding))
     return p

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import tomli_w
+from study_text import with_absolute_paths
 from updating_helpers import NOMINAL, model_fn
 
 from mvtk.cli import main
@@ -125,10 +126,7 @@ def test_cli_runs_the_project_study_layout(tmp_path, capsys):
     text = study_file.read_text()
     assert 'file = "../structures/smart_beam.toml"' in text
     text = text.replace('file = "../structures/smart_beam.toml"', 'file = "coarse.toml"')
-    for f in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_broadband.csv",
-              "SYNTHETIC_smart_beam_decay.csv", "SYNTHETIC_smart_beam_scan.uff",
-              "SYNTHETIC_smart_beam_scan_geometry.csv"):  # the one schema checks every file
-        text = text.replace(f'"{f}"', f'"{(study_file.parent / f).as_posix()}"')
+    text = with_absolute_paths(text, study_file.parent)  # the one schema checks every file
     (tmp_path / "study.toml").write_text(text)
     assert main(["update", str(tmp_path / "study.toml"), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
