@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from correlation_helpers import cantilever_plate, grid_points
+from correlation_helpers import cantilever_plate, grid_points, sdynpy_module
 
 from mvtk import correlation as co
 from mvtk.errors import ParameterError
@@ -115,22 +115,6 @@ def test_efi_closed_form_for_sine_modes():
     assert pl8.history["removed"].iloc[0] in ("1+z", "15+z")
 
 
-def _sdynpy_dof_module():
-    import importlib.util
-    from pathlib import Path
-
-    spec = importlib.util.find_spec("sdynpy")
-    if spec is None:
-        pytest.skip("SDynPy not installed (pip install sdynpy --no-deps, test extra)")
-    # load SDynPy's DOF-selection module alone (pure numpy): its package __init__ pulls
-    # in the VTK/Qt GUI
-    path = Path(spec.submodule_search_locations[0]) / "fem" / "sdynpy_dof.py"
-    s = importlib.util.spec_from_file_location("_sdynpy_dof", path)
-    mod = importlib.util.module_from_spec(s)
-    s.loader.exec_module(mod)
-    return mod
-
-
 def test_efi_matches_sdynpy_removal_by_removal():
     """Same candidates and modes in SDynPy's ``by_effective_independence``: the same
     final set and the same det(FIM) after every removal, uniaxial and triaxial (SDynPy
@@ -138,7 +122,7 @@ def test_efi_matches_sdynpy_removal_by_removal():
 
     Candidates on one half of the plate (y < 0.1 m) so that no two candidates are
     mirror images with equal E_D, where the choice would be decided by round-off."""
-    sdd = _sdynpy_dof_module()
+    sdd = sdynpy_module("fem/sdynpy_dof.py")
     model, modal = cantilever_plate()
     ids = co.fe_node_ids(model)
     rows = np.flatnonzero((model.nodes[:, 1] < 0.099) & (model.nodes[:, 0] > 0.01))
