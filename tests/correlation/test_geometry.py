@@ -237,6 +237,16 @@ def test_bad_coordinate_system_kinds(tmp_path):
     with pytest.raises(FormatError, match=r"bad.uff, record 1 \(dataset 2420\): coordinate "
                                           r"system 4: rotation is not a proper"):
         read_test_geometry(p)
+    p3 = tmp_path / "conical.uff"
+    u = pyuff.UFF(str(p3))
+    u.write_sets(pyuff.prepare_18(cs_num=[6], cs_type=[3], ref_cs_num=[0], cs_name=["c"],
+                                  ref_o=np.zeros((1, 3)), x_point=np.array([[1.0, 0, 0]]),
+                                  xz_point=np.array([[1.0, 0, 1]])), "add")
+    u.write_sets(pyuff.prepare_2411(node_nums=[1], def_cs=[0], disp_cs=[6], color=[1],
+                                    x=[1.0], y=[0.0], z=[0.0]), "add")
+    with pytest.raises(FormatError, match=r"conical.uff, record 1 \(dataset 18\): coordinate "
+                                          r"system 6 has type 3; expected 0 \(Cartesian\), 1"):
+        read_test_geometry(p3)
     p2 = tmp_path / "twice.uff"
     u = pyuff.UFF(str(p2))
     for _ in range(2):
