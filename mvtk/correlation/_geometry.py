@@ -228,7 +228,8 @@ class Sensor:
     source : str
         Where the direction comes from: ``"file"`` (read from a geometry file),
         ``"default +z"`` (a CSV table without a ``directions`` column: one global +z
-        sensor per node assumed) or ``"user"`` (given in code).
+        sensor per node assumed) or ``"user"`` (given in code: :meth:`TestGeometry.with_sensors`,
+        ``read_test_geometry(..., sensors=...)``, e.g. the DOFs of a measurement).
     """
 
     node: int

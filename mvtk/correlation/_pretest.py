@@ -272,6 +272,9 @@ def effective_independence(
         loss = np.empty(ug.size)
         if gsize.max() == 1:
             loss[inv] = ed
+        elif gsize.min() == gsize.max():  # equal groups (triaxial): all blocks at once
+            Qg = Q[np.argsort(inv, kind="stable")].reshape(ug.size, gsize[0], -1)
+            loss[:] = 1.0 - np.linalg.det(np.eye(gsize[0]) - Qg @ Qg.transpose(0, 2, 1))
         else:
             for g in range(ug.size):
                 Qg = Q[inv == g]

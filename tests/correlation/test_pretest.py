@@ -168,3 +168,29 @@ def test_efi_matches_sdynpy_removal_by_removal():
     pl5 = co.effective_independence(model, modal, xyz, 15, modes=range(1, 7), triaxial=True)
     assert len(pl5.dof) == 18
     assert pl5.note.startswith("stopped at 18 DOFs (asked for 15): removing any further")
+
+
+def test_efi_node_groups_of_unequal_size_remove_least_information():
+    """Nodes with 1 or 2 candidate DOFs: each removal is the node whose removal keeps
+    the largest det(FIM), checked against removing every node in turn."""
+    model, modal = cantilever_plate()
+    ids = co.fe_node_ids(model)
+    rows = np.flatnonzero((model.nodes[:, 1] < 0.099) & (model.nodes[:, 0] > 0.01))[::3]
+    nodes = ids[rows]
+    geo = co.TestGeometry(nodes, model.nodes[rows]).with_sensors(
+        [(int(n), d) for k, n in enumerate(nodes)
+         for d in (("+z", "+rx") if k % 2 else ("+z",))])
+    A = co.map_sensors(geo, model, method="nearest").observe(modal.shapes[:, :5])
+    pl = co.effective_independence(model, modal, geo, len(geo.sensors) - 6,
+                                   modes=range(1, 6), triaxial=True)
+    assert len(pl.history) >= 3
+    owner = np.array([s.node for s in geo.sensors])
+    alive = np.ones(len(owner), bool)
+    for _, step in pl.history.iterrows():
+        det0 = np.linalg.det(A[alive].T @ A[alive])
+        after = {n: np.linalg.det(A[alive & (owner != n)].T @ A[alive & (owner != n)])
+                 for n in np.unique(owner[alive])}
+        best = max(after, key=after.get)
+        assert {d.split("+")[0] for d in step["removed"].split()} == {str(best)}
+        assert step["det_loss"] == pytest.approx(1 - after[best] / det0, rel=1e-8)
+        alive &= owner != best
