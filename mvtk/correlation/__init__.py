@@ -2,7 +2,8 @@
 
 - :func:`correlate` -> :class:`CorrelationResult`: the one call of a study stage;
 - :func:`read_test_geometry` / :class:`TestGeometry`: nodes, coordinate systems, trace
-  lines and sensor DOFs from UFF (15, 2411, 18, 82, 2412), TOML or CSV;
+  lines and sensor DOFs from UFF (15, 2411, 18, 2420, 82, 2412; Cartesian, cylindrical
+  and spherical systems), TOML or CSV;
 - :func:`map_sensors` -> :class:`DofMapping`: sensors onto an FE model (nearest node or
   element shape functions), FE shapes projected on the sensor axes;
 - :func:`mac`, :func:`comac`, :func:`ecomac`, :func:`msf`, :func:`cross_orthogonality`
@@ -19,6 +20,7 @@ from ._correlate import CorrelationResult, correlate
 from ._expansion import ExpansionResult, expand_lsq, expand_serep
 from ._fe_adapter import fe_node_ids, fe_shapes
 from ._geometry import (
+    CS_KINDS,
     DIRECTIONS,
     CoordinateSystem,
     Sensor,
@@ -55,6 +57,7 @@ __all__ = [
     "CorrelationResult",
     "correlate",
     "DIRECTIONS",
+    "CS_KINDS",
     "CoordinateSystem",
     "Sensor",
     "TestGeometry",

@@ -44,6 +44,11 @@ def run(args: argparse.Namespace) -> int:
     from ._geometry import read_test_geometry
 
     geo = read_test_geometry(args.geometry, units_scale=args.units_scale)
+    n_default = sum(s.source == "default +z" for s in geo.sensors)
+    if n_default:
+        sys.stderr.write(f"notice: {args.geometry} has no 'directions' column: one global +z "
+                         f"sensor assumed at each of its {n_default} nodes (column "
+                         "direction_source)\n")
     model = build_model(args.structure)
     modal = modal_analysis(model, args.n_modes)
     test = None

@@ -50,8 +50,10 @@ class CorrelationResult:
     comac_min: float
 
     def dof_table(self):
-        """Per test DOF: mapping distances, COMAC, eCOMAC and a ``suspect`` flag."""
-        tab = self.mapping.report[["dof", "node", "direction", "method", "fe_node",
+        """Per test DOF: direction source, mapping distances, COMAC, eCOMAC and a
+        ``suspect`` flag."""
+        tab = self.mapping.report[["dof", "node", "direction", "direction_source",
+                                   "method", "fe_node",
                                    "node_distance_m", "surface_distance_m"]].copy()
         if self.comac is not None:
             tab["comac"] = self.comac.sel(dof=tab["dof"].tolist()).values

@@ -7,9 +7,10 @@ global) plus an origin, trace lines as sequences of node labels, and sensor DOFs
 ``(node, direction)`` pairs read in the node's system or as an explicit unit vector
 (skewed sensors).
 
-Readers: UFF datasets 15 / 2411 (nodes), 18 (coordinate systems), 82 (trace lines),
-2412 (elements, drawn as trace lines) through pyuff (imported lazily), and a simple CSV
-or TOML table. :meth:`TestGeometry.to_toml` writes the TOML form back.
+Readers: UFF datasets 15 / 2411 (nodes), 18 and 2420 (Cartesian, cylindrical and
+spherical coordinate systems), 82 (trace lines), 2412 (elements, drawn as trace lines)
+through pyuff (imported lazily), and a simple CSV or TOML table.
+:meth:`TestGeometry.to_toml` writes the TOML form back.
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ from ..errors import (
 
 __all__ = [
     "CoordinateSystem",
+    "CS_KINDS",
     "Sensor",
     "TestGeometry",
     "DIRECTIONS",
@@ -69,25 +71,42 @@ def direction_label(code: int | str) -> str:
         ) from None
 
 
+#: Coordinate system kinds and their UFF type codes (datasets 18 and 2420).
+CS_KINDS: tuple[str, ...] = ("cartesian", "cylindrical", "spherical")
+
+
 @dataclass(frozen=True, eq=False)
 class CoordinateSystem:
-    """A Cartesian coordinate system.
+    """A Cartesian, cylindrical or spherical coordinate system.
 
     Parameters
     ----------
     id : int
         Label (0 is the global system and is always defined).
     rotation : ndarray (3, 3)
-        Columns are the local x, y, z unit axes expressed in the global system.
+        Columns are the local x, y, z unit axes expressed in the global system (for a
+        curvilinear system: the axes of its underlying Cartesian frame, ``z`` = the
+        cylinder axis / the polar axis of the sphere).
     origin : ndarray (3,)
         Origin in global coordinates (m).
     name : str
+    kind : {"cartesian", "cylindrical", "spherical"}
+        How coordinates and displacement directions are read (UFF type 0, 1, 2):
+
+        - cylindrical: coordinates ``(r, theta, z)`` with ``theta`` in degrees from the
+          local x axis towards y; directions 1, 2, 3 are the radial, tangential
+          (increasing ``theta``) and axial unit vectors *at the node*;
+        - spherical: coordinates ``(r, theta, phi)`` with the polar angle ``theta``
+          from the local z axis and the azimuth ``phi`` from x towards y, both in
+          degrees; directions 1, 2, 3 are the unit vectors of increasing ``r``,
+          ``theta`` and ``phi`` at the node (a right-handed triad, as NASTRAN CORD2S).
     """
 
     id: int
     rotation: np.ndarray
     origin: np.ndarray = field(default_factory=lambda: np.zeros(3))
     name: str = ""
+    kind: str = "cartesian"
 
     def __post_init__(self) -> None:
         R = np.asarray(self.rotation, dtype=float)
@@ -107,18 +126,26 @@ class CoordinateSystem:
                 f"(|R'R - I| = {err:.2g}, det = {np.linalg.det(R):.3g}); expected the local "
                 "axes as orthonormal right-handed columns"
             )
+        if self.kind not in CS_KINDS:
+            raise ParameterError(f"coordinate system {self.id}: unknown kind {self.kind!r}; "
+                                 f"expected one of {CS_KINDS}")
         object.__setattr__(self, "id", int(self.id))
         object.__setattr__(self, "rotation", R)
         object.__setattr__(self, "origin", o)
 
     @classmethod
     def from_points(cls, id: int, origin, x_point, xz_point, name: str = "",
-                    reference: CoordinateSystem | None = None) -> CoordinateSystem:
+                    reference: CoordinateSystem | None = None,
+                    kind: str = "cartesian") -> CoordinateSystem:
         """System from its origin, a point on +x and a point in the +xz plane (UFF 18).
 
-        Points are given in ``reference`` (default global).
+        Points are given as coordinates of ``reference`` (default global; cylindrical
+        or spherical coordinates when ``reference`` is such a system).
         """
-        o, px, pxz = (np.asarray(v, dtype=float).ravel() for v in (origin, x_point, xz_point))
+        pts = [np.asarray(v, dtype=float).ravel() for v in (origin, x_point, xz_point)]
+        if reference is not None:
+            pts = [reference.to_global(v) for v in pts]
+        o, px, pxz = pts
         ex = px - o
         v = pxz - o
         nx = np.linalg.norm(ex)
@@ -131,16 +158,52 @@ class CoordinateSystem:
         ex /= nx
         ey /= np.linalg.norm(ey)
         ez = np.cross(ex, ey)
-        R = np.column_stack([ex, ey, ez])
-        if reference is not None:
-            R = reference.rotation @ R
-            o = reference.to_global(o)
-        return cls(id, R, o, name)
+        return cls(id, np.column_stack([ex, ey, ez]), o, name, kind)
 
-    def to_global(self, xyz) -> np.ndarray:
-        """Global coordinates of point(s) given in this system."""
-        p = np.asarray(xyz, dtype=float)
-        return p @ self.rotation.T + self.origin
+    def local_cartesian(self, coords) -> np.ndarray:
+        """Cartesian coordinates in the system's own frame of point(s) given in its
+        coordinates (``(x, y, z)``, ``(r, theta, z)`` or ``(r, theta, phi)``; angles in
+        degrees), shape (..., 3)."""
+        c = np.asarray(coords, dtype=float)
+        if self.kind == "cartesian":
+            return c.copy()
+        r = c[..., 0]
+        t = np.deg2rad(c[..., 1])
+        if self.kind == "cylindrical":
+            return np.stack([r * np.cos(t), r * np.sin(t), c[..., 2]], axis=-1)
+        f = np.deg2rad(c[..., 2])
+        return np.stack([r * np.sin(t) * np.cos(f), r * np.sin(t) * np.sin(f),
+                         r * np.cos(t)], axis=-1)
+
+    def to_global(self, coords, scale: float = 1.0) -> np.ndarray:
+        """Global coordinates (m) of point(s) given in this system.
+
+        ``scale`` multiplies the lengths of ``coords`` (not the angles, not the origin),
+        e.g. 1e-3 for coordinates in mm.
+        """
+        return (scale * self.local_cartesian(coords)) @ self.rotation.T + self.origin
+
+    def axes_at(self, point) -> np.ndarray:
+        """Displacement directions of the system at a global point.
+
+        Returns a (3, 3) matrix whose columns are the global unit vectors of directions
+        1, 2, 3 (x y z; r theta z; r theta phi) at ``point``; for a Cartesian system
+        this is :attr:`rotation` everywhere. On the axis of a cylindrical system (or at
+        the centre of a spherical one) the angles are taken as 0.
+        """
+        if self.kind == "cartesian":
+            return self.rotation
+        q = self.rotation.T @ (np.asarray(point, dtype=float).ravel() - self.origin)
+        f = np.arctan2(q[1], q[0])
+        cf, sf = np.cos(f), np.sin(f)
+        if self.kind == "cylindrical":
+            L = np.array([[cf, -sf, 0.0], [sf, cf, 0.0], [0.0, 0.0, 1.0]])
+        else:
+            rho = np.linalg.norm(q)
+            t = np.arccos(np.clip(q[2] / rho, -1.0, 1.0)) if rho > 0 else 0.0
+            ct, st = np.cos(t), np.sin(t)
+            L = np.array([[st * cf, ct * cf, -sf], [st * sf, ct * sf, cf], [ct, -st, 0.0]])
+        return self.rotation @ L
 
 
 GLOBAL = CoordinateSystem(0, np.eye(3), np.zeros(3), "global")
@@ -162,12 +225,18 @@ class Sensor:
         says whether it acts on rotations.
     rotation : bool
         True for a rotational sensor.
+    source : str
+        Where the direction comes from: ``"file"`` (read from a geometry file),
+        ``"default +z"`` (a CSV table without a ``directions`` column: one global +z
+        sensor per node assumed) or ``"user"`` (given in code: :meth:`TestGeometry.with_sensors`,
+        ``read_test_geometry(..., sensors=...)``, e.g. the DOFs of a measurement).
     """
 
     node: int
     direction: str
     vector: tuple[float, float, float] | None = None
     rotation: bool = False
+    source: str = "user"
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "node", int(self.node))
@@ -196,13 +265,13 @@ class Sensor:
         return v
 
 
-def _make_sensor(node: int, direction: Any, where: str) -> Sensor:
+def _make_sensor(node: int, direction: Any, where: str, source: str = "user") -> Sensor:
     if isinstance(direction, str | int | np.integer) and not isinstance(direction, bool):
         try:
             d = direction_label(direction)
         except ParameterError as err:
             raise ParameterError(f"{where}: {err}") from None
-        return Sensor(int(node), d, None, d[1] == "r")
+        return Sensor(int(node), d, None, d[1] == "r", source)
     raise ParameterError(f"{where}: direction must be a name such as '+z' or a UFF code, got "
                          f"{direction!r}")
 
@@ -219,7 +288,8 @@ class TestGeometry:
         Global coordinates (m).
     cs : ndarray of int (n_nodes,)
         Displacement coordinate system of each node (0 = global); sensor directions are
-        read in it.
+        read in it (for a cylindrical or spherical system: its directions at the node,
+        :meth:`CoordinateSystem.axes_at`).
     coordinate_systems : mapping of int to CoordinateSystem
         Local systems (0 is added when absent).
     lines : tuple of ndarray of int
@@ -324,8 +394,9 @@ class TestGeometry:
         """Global unit vectors of the sensing axes, shape (n_sensors, 3)."""
         out = np.zeros((len(self.sensors), 3))
         for i, s in enumerate(self.sensors):
-            R = self.coordinate_systems[int(self.cs[self.row(s.node)])].rotation
-            out[i] = R @ s.local_vector()
+            r = self.row(s.node)
+            axes = self.coordinate_systems[int(self.cs[r])].axes_at(self.xyz[r])
+            out[i] = axes @ s.local_vector()
         return out
 
     def with_sensors(self, sensors: Iterable[Sensor | tuple]) -> TestGeometry:
@@ -395,6 +466,7 @@ class TestGeometry:
         d: dict[str, Any] = {"name": self.name} if self.name else {}
         cs = [
             {"id": k, "origin": s.origin.tolist(), "axes": s.rotation.T.tolist(),
+             **({"type": s.kind} if s.kind != "cartesian" else {}),
              **({"name": s.name} if s.name else {})}
             for k, s in sorted(self.coordinate_systems.items()) if k != 0
         ]
@@ -428,7 +500,7 @@ class TestGeometry:
         return text
 
 
-def _skewed(node, name, vector, rotation, where) -> Sensor:
+def _skewed(node, name, vector, rotation, where, source="user") -> Sensor:
     v = np.asarray(vector, dtype=float).ravel()
     if v.shape != (3,) or not np.all(np.isfinite(v)) or np.linalg.norm(v) == 0:
         raise ParameterError(f"{where}: skewed sensor vector must be 3 finite numbers, not all "
@@ -440,7 +512,8 @@ def _skewed(node, name, vector, rotation, where) -> Sensor:
             f"and not starting with a sign or digit), got {name!r}"
         )
     v = v / np.linalg.norm(v)
-    return Sensor(int(node), name, (float(v[0]), float(v[1]), float(v[2])), bool(rotation))
+    return Sensor(int(node), name, (float(v[0]), float(v[1]), float(v[2])), bool(rotation),
+                  source)
 
 
 # ---------------------------------------------------------------------- readers
@@ -451,17 +524,23 @@ def read_test_geometry(source: str | Path | Mapping[str, Any], *, units_scale: f
     Parameters
     ----------
     source : path or mapping
-        ``.uff``/``.unv``: datasets 15 or 2411 (nodes; field ``disp_cs`` = the node's
-        displacement system), 18 (coordinate systems, origin / +x point / +xz point,
-        chained through their reference system), 82 (trace lines) and 2412 (elements,
-        drawn as closed trace lines). Other datasets are ignored.
+        ``.uff``/``.unv``: datasets 15 or 2411 (nodes, given in their definition system
+        ``def_cs``; field ``disp_cs`` = the node's displacement system), 18 (coordinate
+        systems, origin / +x point / +xz point, chained through their reference system)
+        and 2420 (coordinate systems as local axes and origin in global), both
+        Cartesian, cylindrical or spherical (see :class:`CoordinateSystem`), 82 (trace
+        lines) and 2412 (elements, drawn as closed trace lines). Other datasets are
+        ignored.
         ``.toml`` (or a mapping): tables ``[[coordinate_systems]]`` (``id``, ``origin``,
         ``axes`` = the three local axes as rows, or ``x_point`` and ``xz_point``),
         ``[[nodes]]`` (``node x y z [cs]``), ``[[lines]]`` (``nodes``) and
         ``[[sensors]]`` (``node`` and ``direction`` such as ``"+z"``; or ``triaxial =
         true``; or a skewed sensor with a ``direction`` name and a ``vector``).
         ``.csv``: columns ``node, x, y, z`` and optionally ``cs`` and ``directions``
-        (space-separated, e.g. ``"+x +y +z"``).
+        (space-separated, e.g. ``"+x +y +z"``; an empty cell = no sensor at the node).
+        Without a ``directions`` column every node gets one global ``+z`` sensor,
+        marked ``source = "default +z"`` (the ``direction_source`` column of the
+        mapping report).
     units_scale : float
         Factor applied to coordinates and origins (e.g. 1e-3 for a file in mm).
     sensors : sequence, optional
@@ -535,6 +614,9 @@ def _from_mapping(d: Mapping[str, Any], where: str, scale: float) -> TestGeometr
             raise ConfigError(f"{w}: expected a table with an 'id' key, got {c!r}")
         cid = int(_num(c["id"], f"{w}.id"))
         origin = _vec3(c.get("origin", [0, 0, 0]), f"{w}.origin") * scale
+        kind = c.get("type", "cartesian")
+        if kind not in CS_KINDS:
+            raise ConfigError(f"{w}.type: expected one of {CS_KINDS}, got {kind!r}")
         try:
             if "axes" in c:
                 axes = c["axes"]
@@ -542,11 +624,12 @@ def _from_mapping(d: Mapping[str, Any], where: str, scale: float) -> TestGeometr
                     raise ConfigError(f"{w}.axes: expected 3 rows (local x, y, z axes), got "
                                       f"{axes!r}")
                 R = np.column_stack([_vec3(a, f"{w}.axes[{k}]") for k, a in enumerate(axes)])
-                systems[cid] = CoordinateSystem(cid, R, origin, str(c.get("name", "")))
+                systems[cid] = CoordinateSystem(cid, R, origin, str(c.get("name", "")), kind)
             elif "x_point" in c and "xz_point" in c:
                 systems[cid] = CoordinateSystem.from_points(
                     cid, origin, _vec3(c["x_point"], f"{w}.x_point") * scale,
-                    _vec3(c["xz_point"], f"{w}.xz_point") * scale, str(c.get("name", "")))
+                    _vec3(c["xz_point"], f"{w}.xz_point") * scale, str(c.get("name", "")),
+                    kind=kind)
             else:
                 raise ConfigError(f"{w}: give 'axes' (3 rows) or 'x_point' and 'xz_point'")
         except ParameterError as err:
@@ -576,12 +659,12 @@ def _from_mapping(d: Mapping[str, Any], where: str, scale: float) -> TestGeometr
         node = int(_num(s["node"], f"{w}.node"))
         try:
             if s.get("triaxial", False):
-                sens += [Sensor(node, a, None, False) for a in ("+x", "+y", "+z")]
+                sens += [Sensor(node, a, None, False, "file") for a in ("+x", "+y", "+z")]
             elif "vector" in s:
                 sens.append(_skewed(node, s.get("direction", ""), s["vector"],
-                                    bool(s.get("rotation", False)), w))
+                                    bool(s.get("rotation", False)), w, "file"))
             elif "direction" in s:
-                sens.append(_make_sensor(node, s["direction"], w))
+                sens.append(_make_sensor(node, s["direction"], w, "file"))
             else:
                 raise ConfigError(f"{w}: give 'direction', 'vector' or 'triaxial = true'")
         except ParameterError as err:
@@ -619,9 +702,13 @@ def _from_csv(path: Path, scale: float) -> TestGeometry:
         lab.append(node)
         xyz.append(p)
         cs.append(c)
+        if "directions" not in cols:
+            # no directions column: one sensor per node along global +z (CSV nodes are
+            # in the global system), marked as a default in Sensor.source
+            sens.append(Sensor(node, "+z", None, False, "default +z"))
         for dname in row.get("directions", "").split():
             try:
-                sens.append(_make_sensor(node, dname, f"{path}, line {line}"))
+                sens.append(_make_sensor(node, dname, f"{path}, line {line}", "file"))
             except ParameterError as err:
                 raise FormatError(str(err)) from None
     if not lab:
@@ -647,7 +734,7 @@ def _from_uff(path: Path, scale: float) -> TestGeometry:
                           ) from err
     recs = []
     for i, t in enumerate(types):
-        if t not in (15, 18, 82, 2411, 2412):
+        if t not in (15, 18, 82, 2411, 2412, 2420):
             continue
         try:
             with deferred_interrupt():
@@ -658,37 +745,54 @@ def _from_uff(path: Path, scale: float) -> TestGeometry:
     if not any(t in (15, 2411) for _, t, _ in recs):
         raise FormatError(f"{path}: no node dataset (15 or 2411) found; datasets present: "
                           f"{sorted(set(types))}")
-    # coordinate systems (18), resolved through their reference systems
-    raw = {}
-    for idx, t, r in recs:
-        if t != 18:
-            continue
-        for k in range(len(r["cs_num"])):
-            cid = int(r["cs_num"][k])
-            ctype = int(r["cs_type"][k])
-            if ctype != 0:
-                raise UnsupportedFormatError(
-                    f"{path}, record {idx} (dataset 18): coordinate system {cid} has type "
-                    f"{ctype}; only Cartesian systems (type 0) are supported")
-            raw[cid] = (idx, int(r["ref_cs_num"][k]), r["ref_o"][k] * scale,
-                        r["x_point"][k] * scale, r["xz_point"][k] * scale, r["cs_name"][k])
+    # coordinate systems: 18 (three points in a reference system, resolved through it)
+    # and 2420 (local axes as rows plus the origin, in global)
+    raw: dict[int, tuple] = {}
     systems: dict[int, CoordinateSystem] = {0: GLOBAL}
+    for idx, t, r in recs:
+        if t not in (18, 2420):
+            continue
+        if t == 18:
+            ids, kinds = r["cs_num"], r["cs_type"]
+        else:
+            ids, kinds = r["CS_sys_labels"], r["CS_types"]
+        for k in range(len(ids)):
+            cid, ctype = int(ids[k]), int(kinds[k])
+            where = f"{path}, record {idx} (dataset {t})"
+            if ctype not in (0, 1, 2):
+                raise FormatError(f"{where}: coordinate system {cid} has type {ctype}; "
+                                  "expected 0 (Cartesian), 1 (cylindrical) or 2 (spherical)")
+            if cid == 0 or cid in raw or cid in systems:
+                raise FormatError(f"{where}: coordinate system {cid} is defined more than "
+                                  "once (label 0 is the global system)")
+            if t == 18:
+                raw[cid] = (where, int(r["ref_cs_num"][k]), ctype, r["ref_o"][k],
+                            r["x_point"][k], r["xz_point"][k], r["cs_name"][k])
+                continue
+            T = np.asarray(r["CS_matrices"][k], dtype=float)
+            try:
+                systems[cid] = CoordinateSystem(cid, T[:3].T, T[3] * scale,
+                                                str(r["CS_names"][k]).strip(), CS_KINDS[ctype])
+            except ParameterError as err:
+                raise FormatError(f"{where}: {err}") from None
 
     def resolve(cid: int, stack: tuple[int, ...] = ()) -> CoordinateSystem:
         if cid in systems:
             return systems[cid]
         if cid not in raw:
             raise FormatError(f"{path}: coordinate system {cid} is used but not defined "
-                              "(dataset 18)")
+                              "(datasets 18 / 2420)")
         if cid in stack:
             raise FormatError(f"{path}: coordinate systems {list(stack)} refer to each other "
                               "in a cycle")
-        idx, ref, o, px, pxz, name = raw[cid]
+        where, ref, ctype, o, px, pxz, name = raw[cid]
+        rcs = resolve(ref, stack + (cid,))
         try:
-            cs = CoordinateSystem.from_points(cid, o, px, pxz, str(name).strip(),
-                                              resolve(ref, stack + (cid,)))
+            cs = CoordinateSystem.from_points(
+                cid, *(rcs.to_global(v, scale) for v in (o, px, pxz)), str(name).strip(),
+                kind=CS_KINDS[ctype])
         except ParameterError as err:
-            raise FormatError(f"{path}, record {idx} (dataset 18): {err}") from None
+            raise FormatError(f"{where}: {err}") from None
         systems[cid] = cs
         return cs
 
@@ -698,12 +802,12 @@ def _from_uff(path: Path, scale: float) -> TestGeometry:
     for idx, t, r in recs:
         if t in (15, 2411):
             nn = np.asarray(r["node_nums"], dtype=float)
-            p = np.column_stack([r["x"], r["y"], r["z"]]).astype(float) * scale
+            p = np.column_stack([r["x"], r["y"], r["z"]]).astype(float)
             dcs = np.asarray(r["def_cs"], dtype=float).astype(int)
             pcs = np.asarray(r["disp_cs"], dtype=float).astype(int)
             for k in range(nn.size):
                 try:
-                    p[k] = resolve(int(dcs[k])).to_global(p[k])
+                    p[k] = resolve(int(dcs[k])).to_global(p[k], scale)
                     resolve(int(pcs[k]))
                 except FormatError as err:
                     raise FormatError(f"{err} (node {int(nn[k])}, record {idx})") from None

@@ -110,7 +110,9 @@ class DofMapping:
     node, direction : ndarray
         Test node label and direction name of each row.
     report : pandas.DataFrame
-        One row per sensor: ``dof``, ``node``, ``direction``, ``method``, ``fe_node``
+        One row per sensor: ``dof``, ``node``, ``direction``, ``direction_source``
+        (:attr:`Sensor.source`: ``"file"``, ``"default +z"`` or ``"user"``), ``method``,
+        ``fe_node``
         (nearest FE node label), ``node_distance_m``, ``element`` (``"key:index"`` or
         empty), ``xi``, ``eta``, ``surface_distance_m`` (NaN without surface elements),
         ``n_constrained`` (FE DOFs of the row that are constrained, read as zero).
@@ -302,7 +304,8 @@ def map_sensors(
                 vals.append(c)
         rep.append({
             "dof": s.label, "node": s.node, "direction": s.direction,
-            "method": "shape" if el else "nearest", "fe_node": int(ids[fe_node]),
+            "direction_source": s.source, "method": "shape" if el else "nearest",
+            "fe_node": int(ids[fe_node]),
             "node_distance_m": float(dn), "element": el, "xi": xi, "eta": eta,
             "surface_distance_m": float(surface_d), "n_constrained": n_con,
         })

@@ -97,6 +97,10 @@ class PlacementResult:
     det_fim : float
         ``det(Phi_s' Phi_s)`` of the chosen set (Fisher information, unit noise).
     method : str
+    note : str
+        Why the set has more DOFs than asked for (empty otherwise): effective
+        independence stops where removing any further candidate (node) would leave the
+        target modes linearly dependent at the sensors.
     """
 
     geometry: TestGeometry
@@ -108,6 +112,7 @@ class PlacementResult:
     condition_number: float
     det_fim: float
     method: str
+    note: str = ""
 
     def to_dataframe(self):
         """The per-DOF score table."""
@@ -164,7 +169,7 @@ def placement_quality(shapes: xr.DataArray, *, automac_max: float = 0.25):
     })
 
 
-def _result(candidates, mp, keep, A, fn, scores, history, method, automac_max):
+def _result(candidates, mp, keep, A, fn, scores, history, method, automac_max, note=""):
     import pandas as pd
 
     labels = [mp.dof[i] for i in keep]
@@ -181,7 +186,7 @@ def _result(candidates, mp, keep, A, fn, scores, history, method, automac_max):
         geometry=geo, dof=labels, scores=pd.DataFrame({"dof": labels, **scores}),
         history=history, quality=placement_quality(da, automac_max=automac_max),
         automac=mac(da, da), condition_number=cond,
-        det_fim=float(np.linalg.det(sub.T @ sub)), method=method,
+        det_fim=float(np.linalg.det(sub.T @ sub)), method=method, note=note,
     )
 
 
@@ -205,11 +210,14 @@ def effective_independence(
     """Sensor placement by effective independence (Kammer 1991).
 
     Candidates are removed one at a time (or one node at a time with ``triaxial``),
-    always the one with the smallest effective independence
-    ``E_D = diag(Phi (Phi' Phi)^-1 Phi')`` (its contribution to the rank of the target
-    modes; ``sum E_D = n_modes``), until ``n_sensors`` remain. Each removal keeps
-    ``det(Phi' Phi)`` (the Fisher information for unit sensor noise) as large as a
-    one-step greedy choice allows.
+    always the one whose removal costs the smallest fraction of the Fisher information
+    ``det(Phi' Phi)`` (unit sensor noise), until ``n_sensors`` remain. For a single DOF
+    ``i`` that fraction is its effective independence ``E_D,i``, the diagonal of the
+    projector ``Phi (Phi' Phi)^-1 Phi'`` (its contribution to the rank of the target
+    modes; ``sum E_D = n_modes``), since ``det(FIM_without_i) = det(FIM) (1 - E_D,i)``.
+    For a node ``g`` carrying several candidate DOFs (``triaxial=True``) it is
+    ``1 - det(I - P_gg)`` with ``P_gg`` the node's block of the projector (EfI3 of
+    Kammer & Tinker 2004), not the sum of the node's ``E_D``.
 
     Parameters
     ----------
@@ -224,14 +232,23 @@ def effective_independence(
     modes : sequence of int, optional
         1-based target modes (default all modes of ``modal``).
     triaxial : bool
-        Remove whole nodes (all candidate DOFs of a node), scored by the sum of their
-        ``E_D`` (EfI for triaxial sensors).
+        Remove whole nodes (all candidate DOFs of a node).
     automac_max : float
         Threshold of :func:`placement_quality`.
 
     Returns
     -------
     PlacementResult
+        ``scores`` holds ``E_D`` of each kept DOF in the final set; ``history`` one row
+        per removal: ``removed`` DOF label(s), ``E_D`` (their sum), ``det_loss`` (the
+        fraction of ``det(FIM)`` the removal cost, the quantity minimised) and
+        ``det_fim_after``.
+
+    References
+    ----------
+    Kammer, D. C., J. Guidance, Control, and Dynamics 14(2), 251-259, 1991.
+    Kammer, D. C. & Tinker, M. L., "Optimal placement of triaxial accelerometers for
+    modal vibration tests", Mech. Syst. Signal Process. 18(1), 29-41, 2004.
     """
     import pandas as pd
 
@@ -246,29 +263,40 @@ def effective_independence(
     keep = np.arange(A.shape[0])
     groups = np.array([s.node for s in candidates.sensors]) if triaxial else keep.copy()
     hist = []
+    note = ""
     while True:
-        sub = A[keep]
-        Q, _ = np.linalg.qr(sub)
+        Q, _ = np.linalg.qr(A[keep])
         ed = np.sum(Q**2, axis=1)  # diag of the projector
-        g = groups[keep]
-        ug, inv = np.unique(g, return_inverse=True)
-        gsum = np.bincount(inv, weights=ed)
+        ug, inv = np.unique(groups[keep], return_inverse=True)
         gsize = np.bincount(inv)
-        k = int(np.argmin(gsum))
+        loss = np.empty(ug.size)
+        if gsize.max() == 1:
+            loss[inv] = ed
+        elif gsize.min() == gsize.max():  # equal groups (triaxial): all blocks at once
+            Qg = Q[np.argsort(inv, kind="stable")].reshape(ug.size, gsize[0], -1)
+            loss[:] = 1.0 - np.linalg.det(np.eye(gsize[0]) - Qg @ Qg.transpose(0, 2, 1))
+        else:
+            for g in range(ug.size):
+                Qg = Q[inv == g]
+                loss[g] = 1.0 - np.linalg.det(np.eye(Qg.shape[0]) - Qg @ Qg.T)
+        k = int(np.argmin(loss))
         if keep.size - gsize[k] < n_sensors or keep.size - gsize[k] < m:
             break
         drop = keep[inv == k]
         rest = keep[inv != k]
         if _rank(A[rest]) < m:
+            note = (f"stopped at {keep.size} DOFs (asked for {n_sensors}): removing any "
+                    "further candidate would leave the target modes linearly dependent "
+                    "at the sensors")
             break
         hist.append({"step": len(hist) + 1, "removed": " ".join(mp.dof[i] for i in drop),
-                     "E_D": float(gsum[k]),
+                     "E_D": float(ed[inv == k].sum()), "det_loss": float(loss[k]),
                      "det_fim_after": float(np.linalg.det(A[rest].T @ A[rest]))})
         keep = rest
     Q, _ = np.linalg.qr(A[keep])
     ed = np.sum(Q**2, axis=1)
     return _result(candidates, mp, keep, A, fn, {"E_D": ed}, pd.DataFrame(hist),
-                   "effective independence", automac_max)
+                   "effective independence", automac_max, note)
 
 
 def kinetic_energy_placement(

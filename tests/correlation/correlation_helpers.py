@@ -32,3 +32,24 @@ def plate_setup(n_modes=6):
     geo = geo.with_sensors([(n, "+z") for n in geo.node])
     mp = co.map_sensors(geo, model)
     return model, modal, geo, mp, mp.project(modal).isel(mode=slice(0, n_modes))
+
+
+def sdynpy_module(relpath: str):
+    """One pure-numpy module of SDynPy (e.g. ``"fem/sdynpy_dof.py"``), loaded by file.
+
+    SDynPy's package ``__init__`` pulls in its VTK/Qt GUI, so the module is executed
+    alone; skips the calling test when SDynPy (a test extra) is not installed.
+    """
+    import importlib.util
+    from pathlib import Path
+
+    import pytest
+
+    spec = importlib.util.find_spec("sdynpy")
+    if spec is None:
+        pytest.skip("SDynPy not installed (pip install sdynpy --no-deps, test extra)")
+    path = Path(spec.submodule_search_locations[0]) / relpath
+    s = importlib.util.spec_from_file_location("_sdynpy_" + Path(relpath).stem, path)
+    mod = importlib.util.module_from_spec(s)
+    s.loader.exec_module(mod)
+    return mod

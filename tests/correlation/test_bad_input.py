@@ -9,7 +9,7 @@ import xarray as xr
 from correlation_helpers import plate_setup
 
 from mvtk import correlation as co
-from mvtk.errors import DimensionError, FormatError, ParameterError, UnsupportedFormatError
+from mvtk.errors import DimensionError, FormatError, ParameterError
 from mvtk.fe import FEModel
 
 
@@ -130,15 +130,16 @@ def test_triaxial_efi_removes_whole_nodes(setup):
 
 def test_geometry_uff_errors(tmp_path):
     pyuff = pytest.importorskip("pyuff")
-    p = tmp_path / "cyl.uff"
+    p = tmp_path / "cycle.uff"
     u = pyuff.UFF(str(p))
-    u.write_sets(pyuff.prepare_18(cs_num=[1], cs_type=[1], ref_cs_num=[0], cs_name=["c"],
-                                  ref_o=np.zeros((1, 3)), x_point=np.array([[1.0, 0, 0]]),
-                                  xz_point=np.array([[1.0, 0, 1]])), "add")
-    u.write_sets(pyuff.prepare_15(node_nums=[1], def_cs=[0], disp_cs=[0], color=[1],
+    u.write_sets(pyuff.prepare_18(cs_num=[1, 2], cs_type=[1, 0], ref_cs_num=[2, 1],
+                                  cs_name=["a", "b"], ref_o=np.zeros((2, 3)),
+                                  x_point=np.array([[1.0, 0, 0]] * 2),
+                                  xz_point=np.array([[1.0, 0, 1]] * 2)), "add")
+    u.write_sets(pyuff.prepare_15(node_nums=[1], def_cs=[0], disp_cs=[1], color=[1],
                                   x=[0.0], y=[0.0], z=[0.0]), "add")
-    with pytest.raises(UnsupportedFormatError, match=r"record 1 \(dataset 18\): coordinate "
-                                                     r"system 1 has type 1"):
+    with pytest.raises(FormatError, match=r"cycle.uff: coordinate systems \[1, 2\] refer to "
+                                          "each other in a cycle"):
         co.read_test_geometry(p)
     q = tmp_path / "undef.uff"
     u = pyuff.UFF(str(q))

@@ -27,6 +27,7 @@ def test_correlate_tables_and_flags(rng):
     test = test.assign_coords(dof=fe.dof.values)
     res = co.correlate(geo, model, modal, test)
     dofs = res.dof_table()
+    assert (dofs["direction_source"] == "user").all()
     assert dofs.loc[dofs["suspect"], "dof"].tolist() == ["7+z"]
     pairs = res.pairing_table()
     assert pairs["fe_mode"].tolist() == [1, 2, 3, 4, 5, 6] and pairs["paired"].all()
@@ -52,6 +53,16 @@ def test_cli_correlate(tmp_path, capsys):
                  "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["n_sensors"] == 4 and len(out["mac"]) == 4 and out["pairs"] == []
+    # a CSV table without a directions column: one global +z sensor per node, said so
+    csv = tmp_path / "plain.csv"
+    csv.write_text("node,x,y,z\n1,0.1,0.05,0\n2,0.3,0.05,0\n3,0.3,0.25,0\n")
+    assert main(["correlate", str(csv), str(structure), "-n", "3", "--json"]) == 0
+    cap = capsys.readouterr()
+    assert ("plain.csv has no 'directions' column: one global +z sensor assumed at each "
+            "of its 3 nodes") in cap.err
+    out = json.loads(cap.out)
+    assert [d["dof"] for d in out["dofs"]] == ["1+z", "2+z", "3+z"]
+    assert {d["direction_source"] for d in out["dofs"]} == {"default +z"}
     bad = tmp_path / "far.toml"
     bad.write_text('[[nodes]]\nnode = 1\nx = 1.0\ny = 0.0\nz = 0.0\n'
                    '[[sensors]]\nnode = 1\ndirection = "+z"\n')

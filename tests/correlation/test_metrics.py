@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 from pathlib import Path
 
 import numpy as np
 import pytest
 import xarray as xr
 from correlation_helpers import plate_setup as _setup
+from correlation_helpers import sdynpy_module
 
 from mvtk import correlation as co
 from mvtk.errors import DimensionError, ParameterError
@@ -144,14 +144,7 @@ def test_agrees_with_sdypy_and_sdynpy():
     ours = co.mac(test, fe).values
     ema = pytest.importorskip("sdypy.EMA.tools", reason="sdypy-EMA (test extra) not installed")
     np.testing.assert_allclose(ema.MAC(test.values.T, fe.values.T), ours, rtol=1e-12)
-    spec = importlib.util.find_spec("sdynpy")
-    if spec is None:
-        pytest.skip("SDynPy not installed (pip install sdynpy --no-deps, test extra)")
-    # load SDynPy's correlation module alone: its package __init__ pulls in the Qt/VTK GUI
-    path = Path(spec.submodule_search_locations[0]) / "signal_processing" / "sdynpy_correlation.py"
-    s = importlib.util.spec_from_file_location("_sdynpy_correlation", path)
-    sdc = importlib.util.module_from_spec(s)
-    s.loader.exec_module(sdc)
+    sdc = sdynpy_module("signal_processing/sdynpy_correlation.py")
     np.testing.assert_allclose(sdc.mac(test.values.T, fe.values.T), ours, rtol=1e-12)
     H = _frf(fe)
     Hx = H + 0.02 * float(np.abs(H).max()) * rng.normal(size=H.shape)

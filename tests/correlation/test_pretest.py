@@ -6,7 +6,7 @@ import itertools
 
 import numpy as np
 import pytest
-from correlation_helpers import cantilever_plate, grid_points
+from correlation_helpers import cantilever_plate, grid_points, sdynpy_module
 
 from mvtk import correlation as co
 from mvtk.errors import ParameterError
@@ -113,3 +113,84 @@ def test_efi_closed_form_for_sine_modes():
     # the first candidates EfI drops are the supports' neighbours (smallest E_D)
     pl8 = co.effective_independence(model, Modes, cand, 8)
     assert pl8.history["removed"].iloc[0] in ("1+z", "15+z")
+
+
+def test_efi_matches_sdynpy_removal_by_removal():
+    """Same candidates and modes in SDynPy's ``by_effective_independence``: the same
+    final set and the same det(FIM) after every removal, uniaxial and triaxial (SDynPy
+    scores a node by EfI3 = 1 - det(I - P_gg), Kammer & Tinker 2004).
+
+    Candidates on one half of the plate (y < 0.1 m) so that no two candidates are
+    mirror images with equal E_D, where the choice would be decided by round-off."""
+    sdd = sdynpy_module("fem/sdynpy_dof.py")
+    model, modal = cantilever_plate()
+    ids = co.fe_node_ids(model)
+    rows = np.flatnonzero((model.nodes[:, 1] < 0.099) & (model.nodes[:, 0] > 0.01))
+    cand = co.candidate_geometry(model, nodes=ids[rows].tolist())
+    A = co.map_sensors(cand, model, method="nearest").observe(modal.shapes[:, :6])
+    pl = co.effective_independence(model, modal, cand, 10, modes=range(1, 7))
+    keep, dets = sdd.by_effective_independence(10, A, return_efi=True)
+    assert sorted(cand.dof_labels[i] for i in keep) == sorted(pl.dof)
+    h = pl.history
+    assert len(h) == len(dets) == A.shape[0] - 10
+    np.testing.assert_allclose(h["det_fim_after"].to_numpy()[:-1], dets[1:], rtol=1e-8)
+    # Kammer (1991): removing DOF i multiplies det(FIM) by (1 - E_D,i)
+    before = np.concatenate([[np.linalg.det(A.T @ A)], h["det_fim_after"].to_numpy()[:-1]])
+    np.testing.assert_allclose(h["det_fim_after"], before * (1 - h["E_D"]), rtol=1e-8)
+    # Li, Li & Fritzen (2007): E_D is the kinetic energy (unit mass) of the
+    # orthonormalised target modes Psi = Phi (Phi' Phi)^-1/2
+    from scipy.linalg import sqrtm
+
+    full = co.effective_independence(model, modal, cand, A.shape[0], modes=range(1, 7))
+    Psi = A @ np.linalg.inv(sqrtm(A.T @ A).real)
+    np.testing.assert_allclose(full.scores["E_D"], np.sum(Psi**2, axis=1), rtol=1e-10)
+
+    # node groups of 3 DOFs (w and the two slopes: the plate's in-plane DOFs carry none
+    # of these bending modes); here EfI3 keeps a different set than the sum of E_D would
+    tri = co.candidate_geometry(model, nodes=ids[rows].tolist(),
+                                directions=("+z", "+rx", "+ry"))
+    A3 = co.map_sensors(tri, model, method="nearest").observe(modal.shapes[:, :6])
+    pl3 = co.effective_independence(model, modal, tri, 3 * 7, modes=range(1, 7),
+                                    triaxial=True)
+    keep3, dets3 = sdd.by_effective_independence(7, A3.reshape(-1, 3, 6), return_efi=True)
+    assert sorted(int(tri.node[i]) for i in keep3) == sorted(pl3.geometry.node.tolist())
+    np.testing.assert_allclose(pl3.history["det_fim_after"].to_numpy()[:-1], dets3[1:],
+                               rtol=1e-8)
+    np.testing.assert_allclose(pl3.history["det_fim_after"],
+                               np.concatenate([[dets3[0]], dets3[1:]])
+                               * (1 - pl3.history["det_loss"]), rtol=1e-8)
+    assert pl3.note == ""
+    # x y z sensors on a flat plate: the in-plane components of its bending modes are
+    # zero, so 5 nodes (5 useful DOFs) cannot separate 6 modes; the result says why it
+    # keeps more DOFs than asked
+    xyz = co.candidate_geometry(model, nodes=ids[rows][::2].tolist(),
+                                directions=("+x", "+y", "+z"))
+    pl5 = co.effective_independence(model, modal, xyz, 15, modes=range(1, 7), triaxial=True)
+    assert len(pl5.dof) == 18
+    assert pl5.note.startswith("stopped at 18 DOFs (asked for 15): removing any further")
+
+
+def test_efi_node_groups_of_unequal_size_remove_least_information():
+    """Nodes with 1 or 2 candidate DOFs: each removal is the node whose removal keeps
+    the largest det(FIM), checked against removing every node in turn."""
+    model, modal = cantilever_plate()
+    ids = co.fe_node_ids(model)
+    rows = np.flatnonzero((model.nodes[:, 1] < 0.099) & (model.nodes[:, 0] > 0.01))[::3]
+    nodes = ids[rows]
+    geo = co.TestGeometry(nodes, model.nodes[rows]).with_sensors(
+        [(int(n), d) for k, n in enumerate(nodes)
+         for d in (("+z", "+rx") if k % 2 else ("+z",))])
+    A = co.map_sensors(geo, model, method="nearest").observe(modal.shapes[:, :5])
+    pl = co.effective_independence(model, modal, geo, len(geo.sensors) - 6,
+                                   modes=range(1, 6), triaxial=True)
+    assert len(pl.history) >= 3
+    owner = np.array([s.node for s in geo.sensors])
+    alive = np.ones(len(owner), bool)
+    for _, step in pl.history.iterrows():
+        det0 = np.linalg.det(A[alive].T @ A[alive])
+        after = {n: np.linalg.det(A[alive & (owner != n)].T @ A[alive & (owner != n)])
+                 for n in np.unique(owner[alive])}
+        best = max(after, key=after.get)
+        assert {d.split("+")[0] for d in step["removed"].split()} == {str(best)}
+        assert step["det_loss"] == pytest.approx(1 - after[best] / det0, rel=1e-8)
+        alive &= owner != best
