@@ -1,5 +1,6 @@
 """Finite element modelling: sections, elements, meshes, assembly, solvers, piezo."""
 
+from ._affine import AffineModel
 from ._assembly import (
     SparsityPattern,
     assemble_element_matrices,
@@ -138,6 +139,7 @@ __all__ = [
     "write_vtu",
     "write_uff",
     "read_matrices",
+    "AffineModel",
     "read_nastran",
     "constrain_model",
     "ModelSize",

@@ -65,6 +65,56 @@ def _read_table(source, columns: int, what: str) -> list[list[str]]:
     return [[str(v) for v in r] for r in arr]
 
 
+def _int_label(text: str) -> int:
+    """An integer label, also from an integral float ("12.0", from a float array)."""
+    try:
+        return int(text)
+    except ValueError:
+        v = float(text)  # ValueError for non-numbers
+        if not v.is_integer():
+            raise ValueError(f"{text!r} is not an integer") from None
+        return int(v)
+
+
+def _dof_table(source, n: int | None, what: str = "DOF table") -> tuple[list[int], list[int]]:
+    """Node labels and component indices (0..5) of a DOF table with ``n`` rows."""
+    rows = _read_table(source, 2, what)
+    if n is not None and len(rows) != n:
+        raise DimensionError(f"the {what} has {len(rows)} rows, the matrices {n}")
+    labels, comps = [], []
+    for i, (node, dof) in enumerate(rows, start=1):
+        try:
+            labels.append(_int_label(node))
+        except ValueError:
+            raise FormatError(f"{what} row {i}: node {node!r} is not an integer") from None
+        if dof in DOF_NAMES:
+            comps.append(DOF_NAMES.index(dof))
+        elif dof.replace(".0", "", 1).isdigit() and 1 <= float(dof) <= 6:
+            comps.append(int(float(dof)) - 1)
+        else:
+            raise FormatError(f"{what} row {i}: dof {dof!r} is not 1..6 or one of "
+                              f"{', '.join(DOF_NAMES)}")
+    return labels, comps
+
+
+def _node_table(nodes, labels) -> tuple[np.ndarray, np.ndarray]:
+    """Node labels and coordinates (n, 3); all at the origin without a node table."""
+    ids = np.unique(labels)
+    if nodes is None:
+        return ids, np.zeros((len(ids), 3))
+    table = _read_table(nodes, 4, "node table")
+    try:
+        node_ids = np.array([_int_label(r[0]) for r in table])
+        xyz = np.array([[float(v) for v in r[1:]] for r in table])
+    except ValueError as err:
+        raise FormatError(f"node table: expected 'node, x, y, z' numbers ({err})") from err
+    missing = np.setdiff1d(ids, node_ids)
+    if missing.size:
+        raise FormatError(f"nodes {missing[:5].tolist()} of the DOF table are not in the "
+                          "node table")
+    return node_ids, xyz
+
+
 def read_matrices(K, M, dof_table, nodes=None, name: str = "") -> FEModel:
     """FE model from assembled matrices and a DOF table.
 
@@ -96,37 +146,8 @@ def read_matrices(K, M, dof_table, nodes=None, name: str = "") -> FEModel:
         asym = abs(A - A.T).max() if A.nnz else 0.0
         if asym > 1e-8 * max(abs(A).max(), 1e-300):
             raise DimensionError(f"{label} is not symmetric (max |A - A'| = {asym:.3g})")
-    rows = _read_table(dof_table, 2, "DOF table")
-    if len(rows) != n:
-        raise DimensionError(f"the DOF table has {len(rows)} rows, the matrices {n}")
-    labels, comps = [], []
-    for i, (node, dof) in enumerate(rows, start=1):
-        try:
-            labels.append(int(node))
-        except ValueError:
-            raise FormatError(f"DOF table row {i}: node {node!r} is not an integer") from None
-        if dof in DOF_NAMES:
-            comps.append(DOF_NAMES.index(dof))
-        elif dof.isdigit() and 1 <= int(dof) <= 6:
-            comps.append(int(dof) - 1)
-        else:
-            raise FormatError(f"DOF table row {i}: dof {dof!r} is not 1..6 or one of "
-                              f"{', '.join(DOF_NAMES)}")
-    ids = np.unique(labels)
-    if nodes is None:
-        xyz = np.zeros((len(ids), 3))
-        node_ids = ids
-    else:
-        table = _read_table(nodes, 4, "node table")
-        try:
-            node_ids = np.array([int(r[0]) for r in table])
-            xyz = np.array([[float(v) for v in r[1:]] for r in table])
-        except ValueError as err:
-            raise FormatError(f"node table: expected 'node, x, y, z' numbers ({err})") from err
-        missing = np.setdiff1d(ids, node_ids)
-        if missing.size:
-            raise FormatError(f"nodes {missing[:5].tolist()} of the DOF table are not in the "
-                              "node table")
+    labels, comps = _dof_table(dof_table, n)
+    node_ids, xyz = _node_table(nodes, labels)
     index = {int(v): i for i, v in enumerate(node_ids)}
     return FEModel(nodes=xyz, M=Mm, K=Km, dof_node=[index[v] for v in labels],
                    dof_component=comps, node_ids=node_ids, name=name,
