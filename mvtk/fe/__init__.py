@@ -42,6 +42,7 @@ from ._meshio import (
     read_mesh,
     write_uff,
     write_vtu,
+    write_xdmf,
 )
 from ._modal import (
     ENERGY_PARTS,
@@ -137,6 +138,7 @@ __all__ = [
     "from_meshio",
     "mesh_model",
     "write_vtu",
+    "write_xdmf",
     "write_uff",
     "read_matrices",
     "AffineModel",
