@@ -54,6 +54,7 @@ from ._modal import (
 )
 from ._model import DOF_NAMES, FEModel
 from ._nastran import read_nastran
+from ._op4 import Op4Matrix, read_op4
 from ._piezo import (
     PiezoPatch,
     edge_moment_load,
@@ -143,6 +144,8 @@ __all__ = [
     "read_matrices",
     "AffineModel",
     "read_nastran",
+    "read_op4",
+    "Op4Matrix",
     "constrain_model",
     "ModelSize",
     "estimate_plate_size",

@@ -1,12 +1,15 @@
-"""Assembled third-party matrices (Matrix Market, MATLAB .mat) with their DOF table.
+"""Assembled third-party matrices (Matrix Market, MATLAB .mat, Nastran OP4) with DOF tables.
 
 :func:`read_matrices` turns a stiffness and a mass matrix exported by another FE code
 into an :class:`~mvtk.fe.FEModel`, so that modal analysis, reduction, control and
 correlation run on it. The DOF table names the node label and component of every row:
 a CSV file (or array) with columns ``node`` (int label) and ``dof`` (``1..6`` as in
 Nastran/UFF, or a name ``ux uy uz rx ry rz``), one row per matrix row, in matrix order.
-Node coordinates (CSV ``node, x, y, z``) are optional; without them every node sits at
-the origin (the model then has no geometry for plots or mode labels from energy).
+A Nastran OUTPUT4 file (``.op4``, :func:`mvtk.fe.read_op4`) gives its only matrix, the
+only one whose name starts with ``K`` (or ``M``), or the one named after a colon:
+``"model.op4:KAA"``. Node coordinates (CSV ``node, x, y, z``) are optional; without them
+every node sits at the origin (the model then has no geometry for plots or mode labels
+from energy).
 """
 
 from __future__ import annotations
@@ -23,9 +26,39 @@ from ._model import DOF_NAMES, FEModel
 __all__ = ["read_matrices"]
 
 
+def _op4_matrix(path: Path, key: str, name: str | None) -> sp.csr_matrix:
+    """The matrix ``name`` of an OP4 file, or the only one, or the only one named key*."""
+    from ._op4 import read_op4
+
+    mats = read_op4(path)
+    names = list(mats)
+    if name is not None:
+        hit = [n for n in names if n.upper() == name.upper()]
+        if not hit:
+            raise FormatError(f"{str(path)!r}: no matrix {name!r}; found {names}")
+    elif len(names) == 1:
+        hit = names
+    else:
+        hit = [n for n in names if n.upper().startswith(key.upper())]
+        if len(hit) != 1:
+            raise FormatError(f"{str(path)!r} holds the matrices {names}; name the {key} "
+                              f"matrix as '{path.name}:NAME'")
+    m = mats[hit[0]].matrix
+    if np.iscomplexobj(m.data):
+        raise FormatError(f"{str(path)!r}: matrix {hit[0]!r} is complex; expected a real "
+                          f"{key} matrix")
+    return sp.csr_matrix(m, dtype=float)
+
+
 def _load_matrix(path: Path, key: str):
+    head, sep, tail = str(path).rpartition(":")
+    name = None
+    if sep and head.lower().endswith(".op4"):
+        path, name = Path(head), tail  # "model.op4:KAA"
     if not path.exists():
         raise FormatError(f"matrix file {str(path)!r} not found")
+    if path.suffix.lower() == ".op4":
+        return _op4_matrix(path, key, name)
     try:
         if path.suffix.lower() == ".mat":
             data = scipy.io.loadmat(path)
@@ -121,8 +154,9 @@ def read_matrices(K, M, dof_table, nodes=None, name: str = "") -> FEModel:
     Parameters
     ----------
     K, M : path or sparse matrix
-        Stiffness (N/m) and mass (kg) matrices: ``.mtx`` (Matrix Market) or ``.mat``
-        (variables ``K`` and ``M``), or matrices in memory.
+        Stiffness (N/m) and mass (kg) matrices: ``.mtx`` (Matrix Market), ``.mat``
+        (variables ``K`` and ``M``), ``.op4`` (Nastran OUTPUT4, ``"file.op4:NAME"`` to
+        pick a matrix), or matrices in memory.
     dof_table : path or array (n_dof, 2)
         ``node, dof`` per matrix row (see the module notes).
     nodes : path or array (n_nodes, 4), optional
