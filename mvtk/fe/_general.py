@@ -634,8 +634,12 @@ def assemble_model(
                              "dependent in a rigid link; support the independent node instead")
     keep = np.flatnonzero(~fixed & ~dependent)
     T = C[:, keep].tocsc()
-    Kr = (T.T @ K @ T).tocsr()
-    Mr = (T.T @ M @ T).tocsr()
+    if links:
+        Kr = (T.T @ K @ T).tocsr()
+        Mr = (T.T @ M @ T).tocsr()
+    else:  # T selects columns of the identity: a submatrix, no products needed
+        Kr = K.tocsr()[keep][:, keep]
+        Mr = M.tocsr()[keep][:, keep]
     scale_k = max(float(np.abs(Kr.diagonal()).max(initial=0.0)), 1e-300)
     scale_m = max(float(np.abs(Mr.diagonal()).max(initial=0.0)), 1e-300)
     alive = (np.abs(Kr.diagonal()) > 1e-14 * scale_k) | (np.abs(Mr.diagonal())
