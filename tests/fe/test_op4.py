@@ -4,7 +4,7 @@ External truth: the values pyNastran's tests assert for these files
 (pyNastran/op4/test/op4_unit_tests.py, BSD-3; files and licence in tests/fe/data/op4):
 EYE10 = I(10) with form 6, EYE5CD = (-1 + 1j) I(5) with form 6, NULL = 0(3 x 3) with
 form 6, binary KGG == ASCII KGG. Further: the nine matrices are the same in the six
-ASCII/binary, dense/sparse/BIGMAT files, and the free plate's KGG (MSC Nastran) is
+ASCII/binary, dense/sparse/BIGMAT files, and the free plate's KGG is
 symmetric with exactly six rigid-body modes.
 """
 
