@@ -118,3 +118,30 @@ def test_bad_op4_files(tmp_path):
     bad.write_bytes(b"\x01\x02\x03\x04\xff\xfe" * 10)
     with pytest.raises(FormatError, match="not a 32-bit binary OP4 file"):
         read_op4(bad)
+
+
+def test_big_endian_binary(tmp_path):
+    """The little-endian dense binary file rewritten big-endian reads the same."""
+    import struct
+
+    data = (DATA / "mat_b_dn.op4").read_bytes()
+    out, pos, typ = bytearray(), 0, 2
+    while pos < len(data):
+        (n,) = struct.unpack("<i", data[pos:pos + 4])
+        rec = data[pos + 4:pos + 4 + n]
+        if n == 24:  # header: NCOL NROW FORM TYPE + 8-character name
+            ints = struct.unpack("<4i", rec[:16])
+            typ = ints[3]
+            body = struct.pack(">4i", *ints) + rec[16:]
+        else:  # ICOL IROW NW + values
+            fmt = "d" if typ in (2, 4) else "f"
+            vals = np.frombuffer(rec[12:], "<" + fmt)
+            body = struct.pack(">3i", *struct.unpack("<3i", rec[:12])) + vals.astype(
+                ">" + fmt).tobytes()
+        out += struct.pack(">i", n) + body + struct.pack(">i", n)
+        pos += n + 8
+    (tmp_path / "be.op4").write_bytes(bytes(out))
+    big, little = read_op4(tmp_path / "be.op4"), read_op4(DATA / "mat_b_dn.op4")
+    assert list(big) == list(little)
+    for name in little:
+        np.testing.assert_array_equal(big[name].toarray(), little[name].toarray())
