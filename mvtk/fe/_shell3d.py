@@ -331,11 +331,13 @@ def _shared(a, ndim: int) -> bool:
 
 
 def _distinct_shapes(local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Representatives of the distinct in-plane shapes (to 1e-10 of the largest
-    coordinate) and, for every element, the index of its representative."""
+    """Representatives of the distinct in-plane shapes (to 1e-10 of each element's own
+    size, so graded meshes keep their small elements exact) and, for every element, the
+    index of its representative."""
     flat = local.reshape(len(local), -1)
-    scale = max(float(np.abs(flat).max(initial=0.0)), 1e-300)
-    key = np.round(flat / (1e-10 * scale)).astype(np.int64)
+    octave = np.floor(np.log2(np.maximum(np.abs(flat).max(axis=1), 1e-300)))
+    key = np.column_stack([np.round(flat / (1e-10 * 2.0**octave[:, None])),
+                           octave]).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     return first, inverse.ravel()
 

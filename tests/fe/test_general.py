@@ -641,3 +641,23 @@ def test_shared_shapes_and_block_rotation_equal_the_per_element_computation(warp
     Tt = np.swapaxes(T, 1, 2)
     for got, ref in ((K, Tt @ Kl @ T), (M, Tt @ Ml @ T)):
         assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_shape_sharing_keeps_small_elements_of_a_graded_mesh_exact():
+    """Two tiny elements that differ by 1e-8 of their size (1e-14 of the largest element)
+    must not share a matrix."""
+    from mvtk.fe._shell3d import shell_element_matrices
+
+    unit = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    tiny = 1e-6 * unit
+    tiny2 = tiny.copy()
+    tiny2[2, :2] *= 1 + 1e-8
+    xyz = np.stack([unit, tiny, tiny2])
+    lam = Laminate([Ply(STEEL, 1e-7)])
+    sec = (lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]))
+    K, _ = shell_element_matrices(xyz, *sec, np.full(3, lam.thickness))
+    K1, _ = shell_element_matrices(xyz[1:2], *sec, np.full(1, lam.thickness))
+    K2, _ = shell_element_matrices(xyz[2:3], *sec, np.full(1, lam.thickness))
+    np.testing.assert_array_equal(K[1], K1[0])
+    np.testing.assert_array_equal(K[2], K2[0])
+    assert np.abs(K[2] - K[1]).max() > 0
