@@ -5,6 +5,7 @@ Run on demand (not part of the test suite)::
     .venv/bin/python benchmarks/bench_fe.py                 # 90x90 (49 140 DOF), 3 rounds
     .venv/bin/python benchmarks/bench_fe.py --repeats 1 --skip-opensees --skip-large
     .venv/bin/python benchmarks/bench_fe.py --million       # 1 M-DOF plate, 20 modes
+    .venv/bin/python benchmarks/bench_fe.py --imported      # imported 200k-DOF curved shell
 
 Each round runs, in fresh processes one after the other (interleaved, so both see the
 same machine load), mvtk (``plate_model`` + ``modal_analysis``) and OpenSeesPy on the
@@ -22,7 +23,10 @@ the CHOLMOD backend is installed. ``--large`` adds a 200 000-DOF model in a chil
 process with its peak memory. ``--million`` builds a 1 000 000-DOF plate, predicts the
 memory of its eigen step with :func:`mvtk.fe.estimate_eigen_memory` from the mesh graph
 (no assembly), refuses up front when the prediction exceeds the available memory, and
-otherwise solves 20 modes and prints time, peak RSS and prediction.
+otherwise solves 20 modes and prints time, peak RSS and prediction. ``--imported`` writes
+a cylindrical-panel quad mesh (33 000 nodes, 200 000 DOF) as a Gmsh file, imports it
+through :func:`mvtk.fe.read_mesh` and :func:`mvtk.fe.mesh_model`, and prints read and
+assembly time and peak RSS against the built-in rectangular path, per DOF.
 """
 
 from __future__ import annotations
@@ -217,6 +221,8 @@ def main() -> None:
     ap.add_argument("--million", action="store_true", help="only the 1 M-DOF case")
     ap.add_argument("--million-n", type=int, default=408, help="408 -> 1 000 000 DOF")
     ap.add_argument("--quick", action="store_true", help="1 round, no 200k case")
+    ap.add_argument("--imported", action="store_true",
+                    help="only the imported 200k-DOF curved shell vs the built-in plate")
     ap.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -225,9 +231,14 @@ def main() -> None:
             r = child_mvtk(int(rest[0]), int(rest[1]), rest[2] == "1")
         elif kind == "opensees":
             r = child_opensees(int(rest[0]), int(rest[1]))
+        elif kind == "imported":
+            r = child_imported(rest[0], int(rest[1]), int(rest[2]))
         else:
             r = child_million(int(rest[0]), int(rest[1]))
         sys.stdout.write(json.dumps(r) + "\n")
+        return
+    if args.imported:
+        run_imported()
         return
     if args.million:
         m = _run_child("million", str(args.million_n), "20")
@@ -323,6 +334,94 @@ def main() -> None:
         payload["figures"]["large_200k"] = {k: big[k] for k in (
             "n_dof", "assembly_s", "modal_s", "factorize_s", "peak_rss_mib", "backend")}
     write_result("fe", payload)
+
+
+
+# ------------------------------------------------------------------ imported curved shell
+def _cylindrical_panel_msh(path: Path, n_theta: int, n_axial: int) -> int:
+    """Gmsh 2.2 file of a cylindrical panel (R 2 m, 90 deg, 4 m long), quads + clamp line.
+
+    Physical groups: "panel" (quads) and "clamp" (the lines of the straight edge at
+    theta = 0, a node set after import). Returns the number of nodes.
+    """
+    import meshio
+
+    R, span, length = 2.0, np.pi / 2, 4.0
+    th = np.linspace(0.0, span, n_theta + 1)
+    z = np.linspace(0.0, length, n_axial + 1)
+    T, Z = np.meshgrid(th, z, indexing="ij")
+    nodes = np.column_stack([R * np.cos(T).ravel(), R * np.sin(T).ravel(), Z.ravel()])
+    i, j = np.meshgrid(np.arange(n_theta), np.arange(n_axial), indexing="ij")
+    base = (i * (n_axial + 1) + j).ravel()
+    quads = np.column_stack([base, base + n_axial + 1, base + n_axial + 2, base + 1])
+    edge = np.arange(n_axial + 1)  # theta = 0
+    lines = np.column_stack([edge[:-1], edge[1:]])
+    phys = [np.full(len(quads), 1), np.full(len(lines), 2)]
+    meshio.Mesh(nodes, [("quad", quads), ("line", lines)],
+                cell_data={"gmsh:physical": phys, "gmsh:geometrical": phys},
+                field_data={"panel": np.array([1, 2]), "clamp": np.array([2, 1])}
+                ).write(path, file_format="gmsh22", binary=True)
+    return len(nodes)
+
+
+def child_imported(kind: str, n_a: int, n_b: int) -> dict:
+    """Assembly of the imported curved panel (``kind="imported"``) or of the built-in
+    rectangular plate (``kind="builtin"``, n_a x n_b elements), in a fresh process."""
+    import tempfile
+
+    import mvtk.fe as fe
+
+    steel = fe.IsotropicMaterial("steel", E, NU, RHO)
+    out: dict = {"kind": kind, "load_before": os.getloadavg()[0]}
+    if kind == "builtin":
+        t = _clock()
+        model = fe.plate_model(A, A, [fe.Ply(steel, H)], nx=n_a, ny=n_b, clamp="x0")
+        out["assembly_s"], out["assembly_cpu"] = _since(t)
+        out["read_s"] = 0.0
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            path = Path(tmp) / "panel.msh"
+            t = time.perf_counter()
+            out["n_nodes"] = _cylindrical_panel_msh(path, n_a, n_b)
+            out["write_s"] = time.perf_counter() - t
+            out["file_mib"] = path.stat().st_size / 2**20
+            rss_before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+            t = _clock()
+            mesh = fe.read_mesh(path)
+            out["read_s"], out["read_cpu"] = _since(t)
+        t = _clock()
+        model = fe.mesh_model(mesh, {"panel": fe.Laminate([fe.Ply(steel, 0.01)])},
+                              supports={"clamp": "clamped"})
+        out["assembly_s"], out["assembly_cpu"] = _since(t)
+        out["rss_before_read_mib"] = rss_before
+    out["n_dof"] = model.n_dof
+    out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    out["load_after"] = os.getloadavg()[0]
+    return out
+
+
+def run_imported(n_theta: int = 180, n_axial: int = 182, n_builtin: int = 182) -> dict:
+    """Imported 200 000-DOF curved shell against the built-in rectangle, per DOF."""
+    imp = _run_child("imported", "imported", str(n_theta), str(n_axial))
+    ref = _run_child("imported", "builtin", str(n_builtin), str(n_builtin))
+    per_imp = (imp["read_s"] + imp["assembly_s"]) / imp["n_dof"]
+    per_ref = ref["assembly_s"] / ref["n_dof"]
+    asm_ratio = (imp["assembly_s"] / imp["n_dof"]) / per_ref
+    mem_ratio = (imp["peak_rss_mib"] / imp["n_dof"]) / (ref["peak_rss_mib"] / ref["n_dof"])
+    print(f"imported curved shell (Gmsh .msh, {imp['n_nodes']} nodes, "
+          f"{imp['file_mib']:.1f} MiB): {imp['n_dof']} free DOF; read {imp['read_s']:.2f} s, "
+          f"assembly {imp['assembly_s']:.2f} s (cpu {imp['assembly_cpu']:.2f} s); peak RSS "
+          f"{imp['peak_rss_mib']:.0f} MiB; load {imp['load_before']:.1f}")
+    print(f"built-in rectangle {n_builtin}x{n_builtin}: {ref['n_dof']} free DOF; assembly "
+          f"{ref['assembly_s']:.2f} s (cpu {ref['assembly_cpu']:.2f} s); peak RSS "
+          f"{ref['peak_rss_mib']:.0f} MiB; load {ref['load_before']:.1f}")
+    print(f"per DOF, imported / built-in: assembly {asm_ratio:.2f}x, read + assembly "
+          f"{per_imp / per_ref:.2f}x, peak RSS {mem_ratio:.2f}x")
+    figures = {"imported": imp, "builtin": ref, "assembly_ratio_per_dof": asm_ratio,
+               "read_assembly_ratio_per_dof": per_imp / per_ref,
+               "peak_rss_ratio_per_dof": mem_ratio}
+    write_result("fe_imported", {"figures": figures})
+    return figures
 
 
 if __name__ == "__main__":

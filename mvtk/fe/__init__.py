@@ -1,5 +1,6 @@
 """Finite element modelling: sections, elements, meshes, assembly, solvers, piezo."""
 
+from ._affine import AffineModel
 from ._assembly import (
     SparsityPattern,
     assemble_element_matrices,
@@ -41,6 +42,7 @@ from ._meshio import (
     read_mesh,
     write_uff,
     write_vtu,
+    write_xdmf,
 )
 from ._modal import (
     ENERGY_PARTS,
@@ -52,6 +54,7 @@ from ._modal import (
 )
 from ._model import DOF_NAMES, FEModel
 from ._nastran import read_nastran
+from ._op4 import Op4Matrix, read_op4
 from ._piezo import (
     PiezoPatch,
     edge_moment_load,
@@ -136,9 +139,13 @@ __all__ = [
     "from_meshio",
     "mesh_model",
     "write_vtu",
+    "write_xdmf",
     "write_uff",
     "read_matrices",
+    "AffineModel",
     "read_nastran",
+    "read_op4",
+    "Op4Matrix",
     "constrain_model",
     "ModelSize",
     "estimate_plate_size",

@@ -218,10 +218,12 @@ def assemble_element_matrices(
 def _unique_elements(xy: np.ndarray, section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices of geometrically distinct elements (shape relative to node 0 + section)
     and, for every element, the index of its representative."""
-    rel = xy - xy[:, :1, :]
-    scale = max(float(np.abs(rel).max()), 1e-300)
-    key = np.column_stack([np.round(rel.reshape(len(xy), -1) / (1e-10 * scale)),
-                           section[:, None]]).astype(np.int64)
+    rel = (xy - xy[:, :1, :]).reshape(len(xy), -1)
+    # resolution 1e-10 of each element's own size (octave), not of the largest element,
+    # so that slivers at patch edges keep their exact shape
+    octave = np.floor(np.log2(np.maximum(np.abs(rel).max(axis=1), 1e-300)))
+    key = np.column_stack([np.round(rel / (1e-10 * 2.0**octave[:, None])), octave,
+                           section]).astype(np.int64)
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     return first, inverse.ravel()
 

@@ -54,7 +54,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import DimensionError, ParameterError
-from ._assembly import assemble_element_matrices
+from ._assembly import assemble_element_matrices, sparsity_pattern
 from ._beam import BeamSection, _global_matrices, _section_array
 from ._laminate import Laminate
 from ._model import DOF_NAMES, FEModel
@@ -532,9 +532,6 @@ def assemble_model(
     for k, v in node_sets.items():
         if v.size and (v.min() < 0 or v.max() >= n_nodes):
             raise ParameterError(f"node set {k!r} refers to nodes outside 0..{n_nodes - 1}")
-    ident = np.arange(n_all)
-    K = sp.csr_matrix((n_all, n_all))
-    M = sp.csr_matrix((n_all, n_all))
     conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "beam2": []}
     counts = {"mitc4": 0, "mitc3": 0, "beam2": 0}
     element_sets: dict[str, tuple[str, np.ndarray]] = {}
@@ -542,79 +539,45 @@ def assemble_model(
     shell_groups: list = []
     beam_groups: list = []
     normals = np.zeros((n_nodes, 3))
+    # pass 1: check the members, element sets and the shell normals (which supports of
+    # type simply_supported_hard need), so that the DOFs to keep are known before any
+    # assembly and every matrix is assembled directly on them
     for i, mbr in enumerate(members):
-        if isinstance(mbr, ShellSet):
+        if isinstance(mbr, ShellSet | BeamSet):
             el = mbr.elements
+            what = "shell" if isinstance(mbr, ShellSet) else "beam"
             if el.size and (el.min() < 0 or el.max() >= n_nodes):
-                raise ParameterError(f"shell set {mbr.name!r}: node index outside "
+                raise ParameterError(f"{what} set {mbr.name!r}: node index outside "
                                      f"0..{n_nodes - 1}")
-            lam = mbr.laminate()
-            axis = np.asarray(mbr.material_axis, dtype=float)
-            # in chunks: element matrices of large meshes never exist all at once
-            for start in range(0, len(el), _CHUNK):
-                c = el[start:start + _CHUNK]
-                xyz = nodes[c]
-                Ke, Me = shell_element_matrices(
-                    xyz, lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]),
-                    np.full(len(c), lam.thickness),
-                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
-                np.add.at(normals, c.ravel(), np.repeat(shell_frames(xyz)[:, 2], c.shape[1],
-                                                        axis=0))
-                dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
-                K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
-                M = M + assemble_element_matrices(Me, dofs, ident, n_all)
-            kind = "mitc4" if el.shape[1] == 4 else "mitc3"
-        elif isinstance(mbr, BeamSet):
-            el = mbr.elements
-            if el.size and (el.min() < 0 or el.max() >= n_nodes):
-                raise ParameterError(f"beam set {mbr.name!r}: node index outside "
-                                     f"0..{n_nodes - 1}")
-            off = np.asarray(mbr.offset)
-            xa, xb = nodes[el[:, 0]] + off, nodes[el[:, 1]] + off
-            props = np.repeat(_section_array([mbr.section]), len(el), axis=0)
-            try:
-                Ke, Me = _global_matrices(xa, xb, props, mbr.orientation)
-            except ParameterError as err:
-                raise ParameterError(f"beam set {mbr.name!r}: {err}") from err
-            if np.any(off):
-                W = np.zeros((12, 12))
-                W[:6, :6] = W[6:, 6:] = _offset_matrix(off)
-                Ke, Me = W.T @ Ke @ W, W.T @ Me @ W
-            kind = "beam2"
+            if isinstance(mbr, ShellSet):
+                kind = "mitc4" if el.shape[1] == 4 else "mitc3"
+                for start in range(0, len(el), _CHUNK):
+                    c = el[start:start + _CHUNK]
+                    np.add.at(normals, c.ravel(),
+                              np.repeat(shell_frames(nodes[c])[:, 2], c.shape[1], axis=0))
+                shell_groups.append((kind, counts[kind] + np.arange(len(el)), mbr.laminate(),
+                                     mbr.material_axis))
+            else:
+                kind = "beam2"
+                beam_groups.append((counts[kind] + np.arange(len(el)), mbr.section,
+                                    mbr.orientation, mbr.offset))
+            name_ = getattr(mbr, "name", kind)
+            if name_ in element_sets:
+                raise ParameterError(f"element set name {name_!r} used twice")
+            element_sets[name_] = (kind, counts[kind] + np.arange(len(el)))
+            conn[kind].append(el)
+            counts[kind] += len(el)
         elif isinstance(mbr, PointMass):
             if not 0 <= int(mbr.node) < n_nodes:
                 raise ParameterError(f"point mass: node {mbr.node} outside 0..{n_nodes - 1}")
-            dofs = 6 * int(mbr.node) + np.arange(6)
-            M = M + assemble_element_matrices(mbr.matrix()[None], dofs[None], ident, n_all)
-            continue
         elif isinstance(mbr, Spring):
             nn = [mbr.node_a] if mbr.node_b is None else [mbr.node_a, mbr.node_b]
             if any(not 0 <= int(n) < n_nodes for n in nn):
                 raise ParameterError(f"spring: node {nn} outside 0..{n_nodes - 1}")
-            dofs = (6 * np.asarray(nn)[:, None] + np.arange(6)).ravel()
-            K = K + assemble_element_matrices(mbr.matrix()[None], dofs[None], ident, n_all)
-            continue
         elif isinstance(mbr, RigidLink):
             links.append(mbr)
-            continue
         else:
             raise ParameterError(f"member {i}: unsupported type {type(mbr).__name__}")
-        if kind == "beam2":
-            dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
-            K = K + assemble_element_matrices(Ke, dofs, ident, n_all)
-            M = M + assemble_element_matrices(Me, dofs, ident, n_all)
-        if kind == "beam2":
-            beam_groups.append((counts[kind] + np.arange(len(el)), mbr.section,
-                                mbr.orientation, mbr.offset))
-        else:
-            shell_groups.append((kind, counts[kind] + np.arange(len(el)), lam,
-                                 mbr.material_axis))
-        name_ = getattr(mbr, "name", kind)
-        if name_ in element_sets:
-            raise ParameterError(f"element set name {name_!r} used twice")
-        element_sets[name_] = (kind, counts[kind] + np.arange(len(el)))
-        conn[kind].append(el)
-        counts[kind] += len(el)
 
     fixed = np.zeros(n_all, dtype=bool)
     for set_name, kind in (supports or {}).items():
@@ -633,9 +596,84 @@ def assemble_model(
         raise ParameterError(f"DOF {DOF_NAMES[g % 6]} of node {g // 6} is both supported and "
                              "dependent in a rigid link; support the independent node instead")
     keep = np.flatnonzero(~fixed & ~dependent)
-    T = C[:, keep].tocsc()
-    Kr = (T.T @ K @ T).tocsr()
-    Mr = (T.T @ M @ T).tocsr()
+    # with rigid links: assemble on all DOFs, then K = T' K_full T; without: directly on
+    # the kept DOFs (entries on supported DOFs are dropped by the sparsity pattern)
+    if links:
+        index, n_idx = np.arange(n_all), n_all
+    else:
+        index = np.full(n_all, -1, dtype=np.int64)
+        index[keep] = np.arange(len(keep))
+        n_idx = len(keep)
+
+    # pass 2: assembly. Element matrices are symmetrised (they are symmetric to
+    # round-off), so the assembled matrices are exactly symmetric
+    def sym(A):
+        return 0.5 * (A + np.swapaxes(A, 1, 2))
+
+    K_parts, M_parts = [], []
+    for mbr in members:
+        if isinstance(mbr, ShellSet):
+            el = mbr.elements
+            lam = mbr.laminate()
+            axis = np.asarray(mbr.material_axis, dtype=float)
+            nd = 6 * el.shape[1]
+            dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), nd)
+            pattern = sparsity_pattern(dofs, index, n_idx)
+            dk = np.zeros(pattern.nnz + 1)
+            dm = np.zeros(pattern.nnz + 1)
+            # in chunks: element matrices of large meshes never exist all at once
+            for start in range(0, len(el), _CHUNK):
+                c = el[start:start + _CHUNK]
+                Ke, Me = shell_element_matrices(
+                    nodes[c], lam.ABD[None], lam.H[None],
+                    np.array([[lam.I0, lam.I1, lam.I2]]), np.full(len(c), lam.thickness),
+                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
+                pos = pattern.position[start * nd * nd:(start + len(c)) * nd * nd]
+                dk += np.bincount(pos, weights=sym(Ke).ravel(), minlength=pattern.nnz + 1)
+                dm += np.bincount(pos, weights=sym(Me).ravel(), minlength=pattern.nnz + 1)
+            for parts, d in ((K_parts, dk), (M_parts, dm)):
+                parts.append(sp.csr_matrix((d[:pattern.nnz], pattern.indices, pattern.indptr),
+                                           shape=pattern.shape))
+        elif isinstance(mbr, BeamSet):
+            el = mbr.elements
+            off = np.asarray(mbr.offset)
+            xa, xb = nodes[el[:, 0]] + off, nodes[el[:, 1]] + off
+            props = np.repeat(_section_array([mbr.section]), len(el), axis=0)
+            try:
+                Ke, Me = _global_matrices(xa, xb, props, mbr.orientation)
+            except ParameterError as err:
+                raise ParameterError(f"beam set {mbr.name!r}: {err}") from err
+            if np.any(off):
+                W = np.zeros((12, 12))
+                W[:6, :6] = W[6:, 6:] = _offset_matrix(off)
+                Ke, Me = W.T @ Ke @ W, W.T @ Me @ W
+            dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
+            K_parts.append(assemble_element_matrices(sym(Ke), dofs, index, n_idx))
+            M_parts.append(assemble_element_matrices(sym(Me), dofs, index, n_idx))
+        elif isinstance(mbr, PointMass):
+            dofs = 6 * int(mbr.node) + np.arange(6)
+            M_parts.append(assemble_element_matrices(sym(mbr.matrix()[None]), dofs[None],
+                                                     index, n_idx))
+        elif isinstance(mbr, Spring):
+            nn = [mbr.node_a] if mbr.node_b is None else [mbr.node_a, mbr.node_b]
+            dofs = (6 * np.asarray(nn)[:, None] + np.arange(6)).ravel()
+            K_parts.append(assemble_element_matrices(sym(mbr.matrix()[None]), dofs[None],
+                                                     index, n_idx))
+
+    def total(parts):
+        out = sp.csr_matrix((n_idx, n_idx))
+        for A in parts:
+            out = A if out.nnz == 0 else out + A
+        return out.tocsr()
+
+    K, M = total(K_parts), total(M_parts)
+    if links:
+        T = C[:, keep].tocsc()
+        Kr = (T.T @ K @ T).tocsr()
+        Mr = (T.T @ M @ T).tocsr()
+    else:
+        T = None
+        Kr, Mr = K, M
     scale_k = max(float(np.abs(Kr.diagonal()).max(initial=0.0)), 1e-300)
     scale_m = max(float(np.abs(Mr.diagonal()).max(initial=0.0)), 1e-300)
     alive = (np.abs(Kr.diagonal()) > 1e-14 * scale_k) | (np.abs(Mr.diagonal())
@@ -643,12 +681,15 @@ def assemble_model(
     unused = keep[~alive]
     if not np.all(alive):
         sel = np.flatnonzero(alive)
-        Kr, Mr, keep, T = Kr[sel][:, sel], Mr[sel][:, sel], keep[sel], T[:, sel]
-    Kr = ((Kr + Kr.T) * 0.5).tocsr()
-    Mr = ((Mr + Mr.T) * 0.5).tocsr()
+        Kr, Mr, keep = Kr[sel][:, sel], Mr[sel][:, sel], keep[sel]
+        if T is not None:
+            T = T[:, sel]
+    if links:  # T' K T is symmetric to round-off only
+        Kr = ((Kr + Kr.T) * 0.5).tocsr()
+        Mr = ((Mr + Mr.T) * 0.5).tocsr()
     elements = {k: np.concatenate(v) for k, v in conn.items() if v}
     out_meta = {"element_sets": element_sets, "unused_dofs": unused,
-                "recovery": T.tocsr() if links else None,
+                "recovery": T.tocsr() if T is not None else None,
                 "supports": dict(supports or {}), "members": tuple(members),
                 "shell_groups": shell_groups, "beam_groups": beam_groups,
                 "drill_factor": drill_factor}

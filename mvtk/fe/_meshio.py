@@ -43,7 +43,7 @@ from ._general import BeamSet, ShellSet, assemble_model
 from ._laminate import Laminate
 from ._model import FEModel
 
-__all__ = ["ImportedMesh", "read_mesh", "mesh_model", "write_vtu", "write_uff",
+__all__ = ["ImportedMesh", "read_mesh", "mesh_model", "write_vtu", "write_xdmf", "write_uff",
            "ShellSection", "BeamProperty"]
 
 _KINDS = {"triangle": "tri3", "quad": "quad4", "line": "line2", "vertex": "vertex"}
@@ -304,22 +304,9 @@ def _cells(model: FEModel) -> list[tuple[str, np.ndarray]]:
     return [(names[k], v) for k, v in model.elements.items() if k in names and len(v)]
 
 
-def write_vtu(model: FEModel, path: str | Path, result=None,
-              fields: Mapping[str, np.ndarray] | None = None) -> Path:
-    """Write the mesh and (optionally) mode shapes and static results to a VTU file.
-
-    Point data per mode ``k`` (1-based): ``mode_k_displacement`` (n_nodes, 3) and
-    ``mode_k_rotation`` (n_nodes, 3), mass-normalised; field data ``fn_hz``. Each entry
-    ``name -> x`` of ``fields`` (a free-DOF vector, e.g. from :func:`mvtk.fe.static_solve`)
-    gives ``name_displacement`` and ``name_rotation``. Eliminated DOFs (supports) are
-    zero, rigid-link dependents are recovered.
-
-    Returns
-    -------
-    Path
-    """
+def _export_mesh(model: FEModel, result, fields):
+    """meshio.Mesh of the model with mode shapes and static fields as point data."""
     meshio = _meshio()
-    path = Path(path)
     point_data = {"node_id": np.asarray(model.node_ids)}
     field_data = {}
     if result is not None:
@@ -336,9 +323,55 @@ def write_vtu(model: FEModel, path: str | Path, result=None,
         u = model.expand(x)
         point_data[f"{key}_displacement"] = u[:, :3]
         point_data[f"{key}_rotation"] = u[:, 3:]
-    mesh = meshio.Mesh(model.nodes, _cells(model), point_data=point_data,
+    return meshio.Mesh(model.nodes, _cells(model), point_data=point_data,
                        field_data=field_data)
-    mesh.write(path, file_format="vtu")
+
+
+def write_vtu(model: FEModel, path: str | Path, result=None,
+              fields: Mapping[str, np.ndarray] | None = None) -> Path:
+    """Write the mesh and (optionally) mode shapes and static results to a VTU file.
+
+    Point data per mode ``k`` (1-based): ``mode_k_displacement`` (n_nodes, 3, m) and
+    ``mode_k_rotation`` (n_nodes, 3, rad), mass-normalised; field data ``fn_hz``. Each
+    entry ``name -> x`` of ``fields`` (a free-DOF vector, e.g. from
+    :func:`mvtk.fe.static_solve`) gives ``name_displacement`` and ``name_rotation``.
+    Eliminated DOFs (supports) are zero, rigid-link dependents are recovered.
+
+    Returns
+    -------
+    Path
+    """
+    path = Path(path)
+    _export_mesh(model, result, fields).write(path, file_format="vtu")
+    return path
+
+
+def write_xdmf(model: FEModel, path: str | Path, result=None,
+               fields: Mapping[str, np.ndarray] | None = None) -> Path:
+    """Write the mesh, mode shapes and static results to XDMF (ParaView, VisIt).
+
+    The same point data as :func:`write_vtu` (``node_id``, ``mode_k_displacement``,
+    ``mode_k_rotation``, ``name_displacement``, ``name_rotation``); the heavy data go to
+    an HDF5 file next to ``path`` (same stem, ``.h5``), which must stay beside the
+    ``.xdmf`` file. XDMF has no field data: the frequencies (Hz) are written as
+    ``path`` with suffix ``.fn_hz.csv`` (one ``mode,fn_hz`` row per mode) when
+    ``result`` is given.
+
+    Returns
+    -------
+    Path
+        The ``.xdmf`` file.
+    """
+    path = Path(path)
+    if path.suffix.lower() not in (".xdmf", ".xmf"):
+        raise ParameterError(f"XDMF file name must end in .xdmf or .xmf, got {path.name!r}")
+    mesh = _export_mesh(model, result, fields)
+    mesh.field_data = {}
+    mesh.write(path, file_format="xdmf")
+    if result is not None:
+        fn = np.asarray(result.fn_hz, dtype=float)
+        rows = "".join(f"{k},{float(f)!r}\n" for k, f in enumerate(fn, start=1))
+        path.with_suffix(".fn_hz.csv").write_text("mode,fn_hz\n" + rows)
     return path
 
 

@@ -292,15 +292,89 @@ def shell_element_matrices(
         Global DOFs (ux, uy, uz, rx, ry, rz) per node, nodes in element order.
     """
     xyz = np.asarray(xyz, dtype=float)
-    local, T = shell_local_geometry(xyz, material_axis)
     n_el, k = xyz.shape[:2]
+    local3, R = _local_frames(xyz, material_axis)
+    local = local3[:, :, :2]
+    # local matrices depend only on the in-plane shape and the section: with one section
+    # for all elements, compute each distinct shape once (structured and swept meshes,
+    # e.g. a cylinder, have a handful), as the built-in rectangular path does
+    first, rep = None, None
+    if _shared(abd, 3) and _shared(h_shear, 3) and _shared(inertia, 2) and (
+            np.ndim(thickness) == 0 or np.ptp(np.asarray(thickness)) == 0):
+        first, rep = _distinct_shapes(local)
+        if len(first) == n_el:
+            first, rep = None, None
+    pick = local if first is None else local[first]
     if k == 4:
-        Kl, Ml = mitc4_matrices(local, abd, h_shear, inertia, drill_factor)
+        Kl, Ml = mitc4_matrices(pick, abd, h_shear, inertia, drill_factor)
     else:
-        Kl, Ml = mitc3_matrices(local, abd, h_shear, inertia,
-                                np.broadcast_to(thickness, (n_el,)), drill_factor)
+        th = np.broadcast_to(thickness, (n_el,))
+        Kl, Ml = mitc3_matrices(pick, abd, h_shear, inertia,
+                                th if first is None else th[first], drill_factor)
+    if rep is not None:
+        Kl, Ml = Kl[rep], Ml[rep]
+    d = local3[:, :, 2]
+    size = np.abs(local).max(axis=(1, 2))
+    if np.all(np.abs(d).max(axis=1) <= 1e-12 * size):
+        # flat elements (to round-off: the nodes of a quad on a cylinder lie in a plane,
+        # the computed d is ~1e-17 m): T is block diagonal with R in every 3x3 block
+        return _rotate_blocks(Kl, R, k), _rotate_blocks(Ml, R, k)
+    T = _warped_transform(R, d, k)
     Tt = np.swapaxes(T, 1, 2)
     return Tt @ Kl @ T, Tt @ Ml @ T
+
+
+def _shared(a, ndim: int) -> bool:
+    """True when a per-element array is one value for all elements (broadcast)."""
+    a = np.asarray(a)
+    return a.ndim < ndim or a.shape[0] == 1 or bool(np.all(a == a[:1]))
+
+
+def _distinct_shapes(local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Representatives of the distinct in-plane shapes (to 1e-10 of each element's own
+    size, so graded meshes keep their small elements exact) and, for every element, the
+    index of its representative."""
+    flat = local.reshape(len(local), -1)
+    octave = np.floor(np.log2(np.maximum(np.abs(flat).max(axis=1), 1e-300)))
+    key = np.column_stack([np.round(flat / (1e-10 * 2.0**octave[:, None])),
+                           octave]).astype(np.int64)
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    return first, inverse.ravel()
+
+
+def _rotate_blocks(Kl: np.ndarray, R: np.ndarray, k: int) -> np.ndarray:
+    """T' Kl T for T = diag(R, R, ...) (2k blocks of 3x3), without forming T."""
+    n_el, m = len(Kl), 2 * k
+    # K_ab R for all blocks at once: (e, [a i b], j) @ (e, j, q)
+    X = np.matmul(Kl.reshape(n_el, m * 3 * m, 3), R)
+    # R' on the row index i: (e, p, i) @ (e, i, [a b q])
+    X = X.reshape(n_el, m, 3, m * 3).transpose(0, 2, 1, 3).reshape(n_el, 3, m * m * 3)
+    X = np.matmul(np.swapaxes(R, 1, 2), X).reshape(n_el, 3, m, m, 3)
+    return np.ascontiguousarray(X.transpose(0, 2, 1, 3, 4)).reshape(n_el, 6 * k, 6 * k)
+
+
+def _local_frames(xyz: np.ndarray, material_axis) -> tuple[np.ndarray, np.ndarray]:
+    """Node coordinates in the element frame (n_el, k, 3; origin at the centroid) and the
+    frames R (n_el, 3, 3, rows e1 e2 e3)."""
+    R = shell_frames(xyz, material_axis)
+    c = xyz.mean(axis=1, keepdims=True)
+    return np.einsum("eij,eaj->eai", R, xyz - c), R
+
+
+def _warped_transform(R: np.ndarray, d: np.ndarray, k: int) -> np.ndarray:
+    """Rotation blocks times the rigid offset of each node to the mean plane."""
+    n_el = len(R)
+    T = _rotation_blocks(R, k)
+    # u_flat = u + d [e3]x theta  (rigid offset from the true node to the mean plane)
+    e3 = R[:, 2]
+    cross = np.zeros((n_el, 3, 3))
+    cross[:, 0, 1], cross[:, 0, 2] = -e3[:, 2], e3[:, 1]
+    cross[:, 1, 0], cross[:, 1, 2] = e3[:, 2], -e3[:, 0]
+    cross[:, 2, 0], cross[:, 2, 1] = -e3[:, 1], e3[:, 0]
+    W = np.tile(np.eye(6 * k), (n_el, 1, 1))
+    for a in range(k):
+        W[:, 6 * a:6 * a + 3, 6 * a + 3:6 * a + 6] = d[:, a, None, None] * cross
+    return T @ W
 
 
 def shell_local_geometry(xyz: np.ndarray, material_axis=(1.0, 0.0, 0.0)
@@ -316,21 +390,8 @@ def shell_local_geometry(xyz: np.ndarray, material_axis=(1.0, 0.0, 0.0)
         of each node to the mean plane (see the module notes).
     """
     xyz = np.asarray(xyz, dtype=float)
-    R = shell_frames(xyz, material_axis)
-    n_el, k = xyz.shape[:2]
-    c = xyz.mean(axis=1, keepdims=True)
-    local = np.einsum("eij,eaj->eai", R, xyz - c)  # (n_el, k, 3) in (e1, e2, e3)
-    T = _rotation_blocks(R, k)
+    k = xyz.shape[1]
+    local, R = _local_frames(xyz, material_axis)
     d = local[:, :, 2]  # distance of each node from the mean plane (warping)
-    if np.any(np.abs(d) > 0):
-        # u_flat = u + d [e3]x theta  (rigid offset from the true node to the mean plane)
-        e3 = R[:, 2]
-        cross = np.zeros((n_el, 3, 3))
-        cross[:, 0, 1], cross[:, 0, 2] = -e3[:, 2], e3[:, 1]
-        cross[:, 1, 0], cross[:, 1, 2] = e3[:, 2], -e3[:, 0]
-        cross[:, 2, 0], cross[:, 2, 1] = -e3[:, 1], e3[:, 0]
-        W = np.tile(np.eye(6 * k), (n_el, 1, 1))
-        for a in range(k):
-            W[:, 6 * a:6 * a + 3, 6 * a + 3:6 * a + 6] = d[:, a, None, None] * cross
-        T = T @ W
+    T = _warped_transform(R, d, k) if np.any(np.abs(d) > 0) else _rotation_blocks(R, k)
     return local[:, :, :2], T

@@ -214,8 +214,15 @@ class _Problem:
         desc0 = self.describe(self.x0)
         base = self.build(desc0)
         dK, dM = [], []
+        # a builder that knows its exact matrix derivatives (mvtk.fe.AffineModel) gives them
+        exact = getattr(self.builder, "matrix_derivatives", None)
         for j in np.flatnonzero(self.free):
             p = self.params[j]
+            if exact is not None:
+                dKj, dMj = exact(p.path)
+                dK.append(dKj)
+                dM.append(dMj)
+                continue
             h = 0.5 * self.scale[j]
             if v0[j] + h > p.upper:
                 h = -h
@@ -959,7 +966,8 @@ def update(
         per parameter, then evaluate ``K(p) = K0 + sum_j (p_j - p0_j) dK/dp_j`` (same
         for M) without further builds. A real build at the solution checks the
         assumption (``meta["affine_check_rel"]``; AccuracyWarning above 1e-6) and
-        provides ``model``.
+        provides ``model``. A builder with a ``matrix_derivatives(path) -> (dK, dM)``
+        method (:class:`mvtk.fe.AffineModel`) gives the exact derivatives instead.
     xtol, ftol : float
         Stopping tolerances of least_squares.
 

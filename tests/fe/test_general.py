@@ -606,3 +606,58 @@ def test_stiffened_plate_offset_beam_matches_shell_web_model():
     unstiffened = modal_analysis(plate_model(L, B, [Ply(STEEL, t)], nx=32, ny=24,
                                              clamp="x0"), 2).fn_hz
     assert f_beam[1] > 1.5 * unstiffened[0]  # the stiffener matters
+
+
+@pytest.mark.parametrize("warp", [0.0, 2e-3])
+def test_shared_shapes_and_block_rotation_equal_the_per_element_computation(warp):
+    """Congruent elements share one local matrix; flat ones are rotated block by block.
+
+    Truth: the same elements computed one by one with a per-element section (which
+    disables the sharing) through the dense transformation T' K T.
+    """
+    from mvtk.fe import DRILL_FACTOR
+    from mvtk.fe._shell3d import (
+        _local_frames,
+        _rotation_blocks,
+        _warped_transform,
+        mitc4_matrices,
+        shell_element_matrices,
+    )
+
+    base = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0], [0.11, 0.09, warp], [-0.01, 0.12, 0.0]])
+    n = 12
+    rot = Rotation.random(n, random_state=3)
+    xyz = np.stack([rot[i].apply(base) + i for i in range(n)])
+    xyz[::3] = xyz[1]  # exact copies too
+    lam = Laminate([Ply(STEEL, 2e-3), Ply(STEEL, 1e-3)])
+    sec = (lam.ABD, lam.H, np.array([lam.I0, lam.I1, lam.I2]))
+    K, M = shell_element_matrices(xyz, sec[0][None], sec[1][None], sec[2][None],
+                                  np.full(n, lam.thickness), (0.3, 0.5, 0.8))
+    local, R = _local_frames(xyz, (0.3, 0.5, 0.8))
+    Kl, Ml = mitc4_matrices(local[:, :, :2], np.repeat(sec[0][None], n, 0),
+                            np.repeat(sec[1][None], n, 0), np.repeat(sec[2][None], n, 0),
+                            DRILL_FACTOR)
+    T = _warped_transform(R, local[:, :, 2], 4) if warp else _rotation_blocks(R, 4)
+    Tt = np.swapaxes(T, 1, 2)
+    for got, ref in ((K, Tt @ Kl @ T), (M, Tt @ Ml @ T)):
+        assert np.abs(got - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+def test_shape_sharing_keeps_small_elements_of_a_graded_mesh_exact():
+    """Two tiny elements that differ by 1e-8 of their size (1e-14 of the largest element)
+    must not share a matrix."""
+    from mvtk.fe._shell3d import shell_element_matrices
+
+    unit = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
+    tiny = 1e-6 * unit
+    tiny2 = tiny.copy()
+    tiny2[2, :2] *= 1 + 1e-8
+    xyz = np.stack([unit, tiny, tiny2])
+    lam = Laminate([Ply(STEEL, 1e-7)])
+    sec = (lam.ABD[None], lam.H[None], np.array([[lam.I0, lam.I1, lam.I2]]))
+    K, _ = shell_element_matrices(xyz, *sec, np.full(3, lam.thickness))
+    K1, _ = shell_element_matrices(xyz[1:2], *sec, np.full(1, lam.thickness))
+    K2, _ = shell_element_matrices(xyz[2:3], *sec, np.full(1, lam.thickness))
+    np.testing.assert_array_equal(K[1], K1[0])
+    np.testing.assert_array_equal(K[2], K2[0])
+    assert np.abs(K[2] - K[1]).max() > 0

@@ -17,7 +17,7 @@ from mvtk.fe import (
     plate_model,
     rectangular_plate_mesh,
 )
-from mvtk.fe._meshio import mesh_model, read_mesh, write_uff, write_vtu
+from mvtk.fe._meshio import mesh_model, read_mesh, write_uff, write_vtu, write_xdmf
 
 meshio = pytest.importorskip("meshio")
 DATA = Path(__file__).resolve().parents[2] / "data" / "structures"
@@ -153,6 +153,47 @@ def test_vtu_and_uff_export_and_to_xarray(tmp_path):
     n, c = model.dof_node[0], model.dof_component[0]
     assert da.dof.values[0] == f"{model.node_ids[n]}{['+x', '+y', '+z', '+rx', '+ry', '+rz'][c]}"
     assert da.attrs["normalisation"] == "mass" and np.isnan(da.zeta).all()
+
+
+def test_xdmf_export_round_trip_with_shells_and_beams(tmp_path):
+    """XDMF (XML + HDF5) read back with meshio: mixed quad/line cells, shapes, fields."""
+    from mvtk.fe import BeamSet, ShellSet, assemble_model, static_solve, tube_section
+
+    mesh = rectangular_plate_mesh(0.3, 0.2, 6, 4)
+    nodes, quads = mesh.nodes, mesh.elements
+    on_y0 = np.flatnonzero(np.isclose(nodes[:, 1], 0.1))
+    on_y0 = on_y0[np.argsort(nodes[on_y0, 0])]
+    beams = np.column_stack([on_y0[:-1], on_y0[1:]])
+    clamp = np.flatnonzero(np.isclose(nodes[:, 0], 0.0))
+    model = assemble_model(
+        nodes, [ShellSet(quads, Laminate([Ply(STEEL, 1e-3)])),
+                BeamSet(beams, tube_section(STEEL, 0.004), offset=(0, 0, -0.005))],
+        supports={"clamp": "clamped"}, node_sets={"clamp": clamp})
+    res = modal_analysis(model, 3)
+    f = np.zeros(model.n_dof)
+    f[model.dof_index(int(on_y0[-1]), "uz")] = 1.0
+    x = static_solve(model, f)
+    out = write_xdmf(model, tmp_path / "m.xdmf", res, fields={"tip_load": x})
+    assert out == tmp_path / "m.xdmf" and (tmp_path / "m.h5").exists()
+    back = meshio.read(out)
+    np.testing.assert_allclose(back.points, model.nodes)
+    assert {c.type: len(c.data) for c in back.cells} == {"quad": len(quads),
+                                                         "line": len(beams)}
+    full = model.expand(res.shapes)
+    for k in range(3):
+        np.testing.assert_array_equal(back.point_data[f"mode_{k + 1}_displacement"],
+                                      full[:, :3, k])
+        np.testing.assert_array_equal(back.point_data[f"mode_{k + 1}_rotation"],
+                                      full[:, 3:, k])
+    np.testing.assert_array_equal(back.point_data["tip_load_displacement"],
+                                  model.expand(x)[:, :3])
+    np.testing.assert_array_equal(back.point_data["node_id"], model.node_ids)
+    table = np.loadtxt(tmp_path / "m.fn_hz.csv", delimiter=",", skiprows=1)
+    np.testing.assert_array_equal(table[:, 1], res.fn_hz)
+    with pytest.raises(ParameterError, match=r"must end in .xdmf or .xmf, got 'm.vtu'"):
+        write_xdmf(model, tmp_path / "m.vtu", res)
+    with pytest.raises(ParameterError, match=r"field 'bad' must have shape"):
+        write_xdmf(model, tmp_path / "m.xdmf", fields={"bad": np.ones(3)})
 
 
 def test_matrix_market_round_trip_with_dof_table(tmp_path):
