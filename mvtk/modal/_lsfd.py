@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from ..errors import ParameterError
 from ._frf import FRF_TYPES
@@ -45,13 +46,21 @@ def synthesise(fit: LsfdFit, f_hz) -> np.ndarray:
     """FRFs ``(n_response, n_reference, n_frequency)`` of the fitted model at ``f_hz``."""
     w = 2 * np.pi * np.asarray(f_hz, dtype=float)
     iw = 1j * w
+    nm = fit.pole.size
+    shape = fit.residue.shape[1:]
     with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.zeros(fit.residue.shape[1:] + (w.size,), complex)
-        for lam, A in zip(fit.pole, fit.residue):
-            out += A[..., None] / (iw - lam) + np.conj(A)[..., None] / (iw - np.conj(lam))
-        out += fit.lower[..., None] / iw**2 + fit.upper[..., None]
-        out *= iw**fit.power
-    return out
+        # modal terms as one product: (n_FRF, 2 n_modes + 2) coefficients times the
+        # (2 n_modes + 2, n_frequency) basis of poles, conjugate poles and residuals
+        basis = np.empty((2 * nm + 2, w.size), complex)
+        basis[:nm] = 1.0 / (iw[None, :] - fit.pole[:, None])
+        basis[nm:2 * nm] = 1.0 / (iw[None, :] - np.conj(fit.pole)[:, None])
+        basis[-2] = 1.0 / iw**2
+        basis[-1] = 1.0
+        coef = np.concatenate([fit.residue.reshape(nm, -1).T,
+                               np.conj(fit.residue).reshape(nm, -1).T,
+                               fit.lower.reshape(-1, 1), fit.upper.reshape(-1, 1)], axis=1)
+        out = (coef.astype(complex) @ basis) * iw**fit.power
+    return out.reshape(shape + (w.size,))
 
 
 def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True) -> LsfdFit:
@@ -97,7 +106,10 @@ def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True
     no, ni = H.shape[:2]
     Y = H[:, :, keep].reshape(no * ni, -1).T
     rhs = np.vstack([Y.real, Y.imag])
-    x = np.linalg.lstsq(A / colnorm, rhs, rcond=None)[0] / colnorm[:, None]
+    # one complete orthogonal factorisation (QR with column pivoting, LAPACK gelsy) of
+    # the shared basis serves all n_response * n_reference right-hand sides
+    x = scipy.linalg.lstsq(A / colnorm, rhs, lapack_driver="gelsy",
+                           check_finite=False)[0] / colnorm[:, None]
     x = x.T.reshape(no, ni, ncoef)
     res = x[..., 0:2 * nm:2] + 1j * x[..., 1:2 * nm:2]        # (no, ni, nm)
     if residuals:
