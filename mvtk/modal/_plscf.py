@@ -181,7 +181,8 @@ def plscf(
         if ni > 1 and mu.size:
             pw = mu[:, None] ** np.arange(p + 1)[None, :]
             coef = np.concatenate([blocks, np.eye(ni)[None]], axis=0)   # (p+1, ni, ni)
-            dmat = np.einsum("kr,rij->kji", pw, coef)                   # D(mu)^T
+            dmat = (pw @ coef.reshape(p + 1, ni * ni)).reshape(-1, ni, ni)
+            dmat = dmat.transpose(0, 2, 1)                              # D(mu)^T
             vec = np.conj(np.linalg.svd(dmat)[2][:, -1, :])
         else:
             vec = np.ones((mu.size, 1), complex)
