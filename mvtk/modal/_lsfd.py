@@ -10,7 +10,7 @@ import scipy.linalg
 from ..errors import ParameterError
 from ._frf import FRF_TYPES
 
-__all__ = ["lsfd", "LsfdFit", "synthesise"]
+__all__ = ["lsfd", "LsfdFit", "synthesise", "local_misfit"]
 
 
 @dataclass(frozen=True)
@@ -63,6 +63,71 @@ def synthesise(fit: LsfdFit, f_hz) -> np.ndarray:
     return out.reshape(shape + (w.size,))
 
 
+def _system(H, f_hz, lam, frf_type, residuals):
+    """Real least-squares system of LSFD: column-normalised basis, right-hand sides.
+
+    Returns ``(A / colnorm, colnorm, rhs, keep)``: rows are the real then the imaginary
+    parts of the kept lines ``keep``, columns the real/imaginary residue parts of each
+    pole then the lower and upper residuals; ``rhs`` has one column per FRF.
+    """
+    f = np.asarray(f_hz, dtype=float)
+    power = FRF_TYPES.get(frf_type, 0)
+    keep = f > 0 if residuals else np.ones(f.size, bool)
+    w = 2 * np.pi * f[keep]
+    ncoef = 2 * lam.size + (2 if residuals else 0)
+    if 2 * w.size < ncoef:
+        raise ParameterError(
+            f"lsfd: {w.size} lines cannot determine {ncoef} real coefficients per FRF"
+        )
+    B = _basis(w, lam, power, residuals)
+    A = np.vstack([B.real, B.imag])
+    colnorm = np.linalg.norm(A, axis=0)
+    colnorm[colnorm == 0] = 1.0
+    Y = H[:, :, keep].reshape(H.shape[0] * H.shape[1], -1).T
+    return A / colnorm, colnorm, np.vstack([Y.real, Y.imag]), keep
+
+
+def local_misfit(H, f_hz, poles, frf_type, windows, *, residuals: bool = True):
+    """LSFD misfit within each mode's window, with and without that mode in the model.
+
+    For mode ``m`` the FRFs are fitted once with all poles and once with every pole but
+    ``m`` (same residual terms, all lines of the band); both fits are then compared
+    with the measured FRFs on the lines of ``windows[m]`` only. One QR factorisation of
+    the shared basis serves all modes: dropping the two columns of mode ``m`` leaves a
+    small ``(n_coef, n_coef - 2)`` least-squares problem in the triangular factor.
+
+    Parameters
+    ----------
+    H, f_hz, poles, frf_type, residuals
+        As for :func:`lsfd`.
+    windows : sequence of bool arrays, one per pole
+        Lines (of ``f_hz``) on which the misfit of that mode is measured.
+
+    Returns
+    -------
+    with_mode, without_mode, energy : numpy.ndarray
+        ``sum |H - H_fit|^2`` over the window for the full model and for the model
+        without the mode, and ``sum |H|^2`` over the window (units of ``|H|^2``).
+    """
+    H = np.asarray(H)
+    lam = np.atleast_1d(np.asarray(poles, dtype=complex))
+    A, _, rhs, keep = _system(H, f_hz, lam, frf_type, residuals)
+    Q, R = np.linalg.qr(A)
+    c = Q.T @ rhs
+    x_all = scipy.linalg.lstsq(R, c, lapack_driver="gelsy", check_finite=False)[0]
+    nk = int(keep.sum())
+    out = np.zeros((3, lam.size))
+    for m, win in enumerate(windows):
+        lines = np.flatnonzero(np.asarray(win)[keep])
+        rows = np.concatenate([lines, lines + nk])
+        cols = np.setdiff1d(np.arange(A.shape[1]), [2 * m, 2 * m + 1])
+        x0 = scipy.linalg.lstsq(R[:, cols], c, lapack_driver="gelsy", check_finite=False)[0]
+        out[0, m] = np.sum((A[rows] @ x_all - rhs[rows]) ** 2)
+        out[1, m] = np.sum((A[rows][:, cols] @ x0 - rhs[rows]) ** 2)
+        out[2, m] = np.sum(rhs[rows] ** 2)
+    return out[0], out[1], out[2]
+
+
 def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True) -> LsfdFit:
     """Residues of given poles by linear least squares on every FRF at once.
 
@@ -88,27 +153,15 @@ def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True
         above) residual terms.
     """
     H = np.asarray(H)
-    f = np.asarray(f_hz, dtype=float)
     lam = np.atleast_1d(np.asarray(poles, dtype=complex))
+    A, colnorm, rhs, _ = _system(H, f_hz, lam, frf_type, residuals)
     power = FRF_TYPES.get(frf_type, 0)
-    keep = f > 0 if residuals else np.ones(f.size, bool)
-    w = 2 * np.pi * f[keep]
     nm = lam.size
-    ncoef = 2 * nm + (2 if residuals else 0)
-    if 2 * w.size < ncoef:
-        raise ParameterError(
-            f"lsfd: {w.size} lines cannot determine {ncoef} real coefficients per FRF"
-        )
-    B = _basis(w, lam, power, residuals)
-    A = np.vstack([B.real, B.imag])
-    colnorm = np.linalg.norm(A, axis=0)
-    colnorm[colnorm == 0] = 1.0
+    ncoef = A.shape[1]
     no, ni = H.shape[:2]
-    Y = H[:, :, keep].reshape(no * ni, -1).T
-    rhs = np.vstack([Y.real, Y.imag])
     # one complete orthogonal factorisation (QR with column pivoting, LAPACK gelsy) of
     # the shared basis serves all n_response * n_reference right-hand sides
-    x = scipy.linalg.lstsq(A / colnorm, rhs, lapack_driver="gelsy",
+    x = scipy.linalg.lstsq(A, rhs, lapack_driver="gelsy",
                            check_finite=False)[0] / colnorm[:, None]
     x = x.T.reshape(no, ni, ncoef)
     res = x[..., 0:2 * nm:2] + 1j * x[..., 1:2 * nm:2]        # (no, ni, nm)
