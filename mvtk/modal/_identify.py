@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._lsfd import local_misfit, lsfd, synthesise
+from ._lsfd import lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
 from ._result import IdentifiedModes
@@ -201,27 +201,23 @@ def _local_correlation(Hm, Hs, windows):
     return out
 
 
-def _support(h, f, poles, kind, windows, residuals):
-    """``misfit without the mode / misfit with it`` within each mode's window."""
-    if not len(poles):
-        return np.zeros(0)
-    ok = np.all(np.isfinite(h), axis=(0, 1))
-    wins = [w & ok for w in windows]
-    r_with, r_without, _ = local_misfit(np.where(np.isfinite(h), h, 0.0), f, poles, kind,
-                                        wins, residuals=residuals)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
-
-
 def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True):
     """LSFD on the selected poles and everything the result table needs."""
     f = h["frequency"].values
     kind = h.attrs.get("frf_type", "other")
-    fit = lsfd(h.values, f, sel.pole, kind, residuals=residuals)
-    nm = sel.pole.size
-    no = h.sizes["response"]
     fn = np.abs(sel.pole) / (2 * np.pi)
     zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
+    windows, half = _windows(f, fn, zeta)
+    Hv = h.values
+    finite = np.all(np.isfinite(Hv), axis=(0, 1))
+    fit, (r_with, r_without, _) = lsfd_with_misfit(
+        Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0), f, sel.pole, kind,
+        [w & finite for w in windows], residuals=residuals)
+    # support: misfit without / with the mode within its window
+    with np.errstate(divide="ignore", invalid="ignore"):
+        support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
+    nm = sel.pole.size
+    no = h.sizes["response"]
     psi = np.zeros((nm, no), complex)
     part = np.zeros((nm, h.sizes["reference"]), complex)
     for m in range(nm):
@@ -273,9 +269,7 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     need = clus.min_count
     df = float(np.median(np.diff(f)))
     contrib = _contribution(fit, h)
-    windows, half = _windows(f, fn, zeta)
     local = _local_correlation(h.values, syn_v, windows)
-    support = _support(h.values, f, sel.pole, kind, windows, residuals)
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
                                      stab.zeta_max, df_hz=df, contribution=contrib,
                                      local=local, support=support, half_hz=half)

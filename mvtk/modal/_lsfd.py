@@ -112,11 +112,22 @@ def local_misfit(H, f_hz, poles, frf_type, windows, *, residuals: bool = True):
     H = np.asarray(H)
     lam = np.atleast_1d(np.asarray(poles, dtype=complex))
     A, _, rhs, keep = _system(H, f_hz, lam, frf_type, residuals)
+    return _misfits(_factor(A, rhs), A, rhs, keep, windows)
+
+
+def _factor(A, rhs):
+    """``(R, Q^T rhs, x)``: economic QR of the basis and the least-squares solution."""
     Q, R = np.linalg.qr(A)
     c = Q.T @ rhs
-    x_all = scipy.linalg.lstsq(R, c, lapack_driver="gelsy", check_finite=False)[0]
+    # rank-revealing solve (QR with column pivoting) on the small triangular factor
+    x = scipy.linalg.lstsq(R, c, lapack_driver="gelsy", check_finite=False)[0]
+    return R, c, x
+
+
+def _misfits(qr, A, rhs, keep, windows):
+    R, c, x_all = qr
     nk = int(keep.sum())
-    out = np.zeros((3, lam.size))
+    out = np.zeros((3, len(windows)))
     for m, win in enumerate(windows):
         lines = np.flatnonzero(np.asarray(win)[keep])
         rows = np.concatenate([lines, lines + nk])
@@ -152,21 +163,33 @@ def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True
         Fit the lower (``LR / (i w)^2``, modes below the band) and upper (``UR``, modes
         above) residual terms.
     """
+    return _fit(H, f_hz, poles, frf_type, residuals)[0]
+
+
+def _fit(H, f_hz, poles, frf_type, residuals):
+    """LSFD fit plus what :func:`_misfits` needs (basis, right-hand sides, QR)."""
     H = np.asarray(H)
     lam = np.atleast_1d(np.asarray(poles, dtype=complex))
-    A, colnorm, rhs, _ = _system(H, f_hz, lam, frf_type, residuals)
+    A, colnorm, rhs, keep = _system(H, f_hz, lam, frf_type, residuals)
     power = FRF_TYPES.get(frf_type, 0)
     nm = lam.size
     ncoef = A.shape[1]
     no, ni = H.shape[:2]
-    # one complete orthogonal factorisation (QR with column pivoting, LAPACK gelsy) of
-    # the shared basis serves all n_response * n_reference right-hand sides
-    x = scipy.linalg.lstsq(A, rhs, lapack_driver="gelsy",
-                           check_finite=False)[0] / colnorm[:, None]
+    # one QR factorisation of the shared basis serves all n_response * n_reference
+    # right-hand sides
+    qr = _factor(A, rhs)
+    x = qr[2] / colnorm[:, None]
     x = x.T.reshape(no, ni, ncoef)
     res = x[..., 0:2 * nm:2] + 1j * x[..., 1:2 * nm:2]        # (no, ni, nm)
     if residuals:
         lower, upper = x[..., -2], x[..., -1]
     else:
         lower = upper = np.zeros((no, ni))
-    return LsfdFit(lam, np.moveaxis(res, -1, 0), lower, upper, power)
+    fit = LsfdFit(lam, np.moveaxis(res, -1, 0), lower, upper, power)
+    return fit, A, rhs, keep, qr
+
+
+def lsfd_with_misfit(H, f_hz, poles, frf_type, windows, *, residuals=True):
+    """:func:`lsfd` and :func:`local_misfit` from one factorisation of the basis."""
+    fit, A, rhs, keep, qr = _fit(H, f_hz, poles, frf_type, residuals)
+    return fit, _misfits(qr, A, rhs, keep, windows)
