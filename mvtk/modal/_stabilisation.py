@@ -200,6 +200,12 @@ def _cluster(f, z, crit: ClusterCriteria):
         g = idx[a:b]
         if g.size == 1:
             lab = np.array([1])
+        elif g.size == 2:
+            # one merge at the pair's distance: together when it is within the cut
+            fa, fb, za, zb = f[g[0]], f[g[1]], z[g[0]], z[g[1]]
+            d = max(abs(fa - fb) / (0.5 * (fa + fb)) / crit.cluster_df,
+                    abs(za - zb) / max(0.5 * (za + zb), crit.zeta_floor) / crit.cluster_dzeta)
+            lab = np.array([1, 1]) if d <= 1.0 else np.array([1, 2])
         else:
             fg, zg = f[g], z[g]
             fm = 0.5 * (fg[:, None] + fg[None, :])
