@@ -253,9 +253,10 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     syn.name = "frf_synthesised"
     # lines where either FRF is not finite (the residual terms of a band that starts at
     # 0 Hz are infinite there) take no part in the correlation
-    ok = np.isfinite(h.values) & np.isfinite(syn_v)
-    Hm = np.where(ok, h.values, 0.0)
-    Sv = np.where(ok, syn_v, 0.0)
+    bad = ~(np.isfinite(h.values) & np.isfinite(syn_v))
+    Hm, Sv = h.values, syn_v
+    if bad.any():
+        Hm, Sv = np.where(bad, 0.0, Hm), np.where(bad, 0.0, Sv)
     num = np.abs(np.sum(Hm * np.conj(Sv), axis=(1, 2))) ** 2
     den = np.sum(np.abs(Hm) ** 2, axis=(1, 2)) * np.sum(np.abs(Sv) ** 2, axis=(1, 2))
     corr = xr.DataArray(np.where(den > 0, num / np.where(den > 0, den, 1), 0.0),

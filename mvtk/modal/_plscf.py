@@ -125,7 +125,11 @@ def plscf(
     # lag sums: rho (R), sigma (S_o), tau (sum_o T_o)
     rho = _lag_sums(zk, np.ones((nf, 1)))[:, :, None]                      # (2P+1, 1, 1)
     sig = _lag_sums(zk, Hs.reshape(no * ni, nf).T)                         # (2P+1, no*ni)
-    q = np.einsum("oif,ojf->fij", np.conj(Hs), Hs).reshape(nf, ni * ni)
+    q = np.empty((nf, ni, ni), complex)
+    for i in range(ni):
+        for j in range(ni):
+            q[:, i, j] = np.sum(np.conj(Hs[:, i]) * Hs[:, j], axis=0)
+    q = q.reshape(nf, ni * ni)
     tau = _lag_sums(zk, q).reshape(2 * P + 1, ni, ni)
     R = _toeplitz_blocks(rho, P + 1, (1, 1))
     R[np.diag_indices_from(R)] += 1e-12 * np.trace(R) / R.shape[0]
