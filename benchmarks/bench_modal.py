@@ -68,64 +68,92 @@ def errors(found_fn, found_z, fn, zeta):
     return df.max(), dz.max()
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--max-order", type=int, default=80)
-    args = ap.parse_args()
-    n_resp, n_lines = (12, 1000) if args.quick else (60, 4000)
-    h, fn, zeta = make_data(n_resp, 3, n_lines)
-    band = (10.0, 490.0)
-    print(f"data: {n_resp} responses x 3 references x {n_lines} lines; 15 modes; "
-          f"orders up to {args.max_order}")
+def _timed(fn):
+    t0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - t0, time.process_time() - c0
 
-    t0, c0 = time.perf_counter(), time.process_time()
-    d = modal.plscf(h, *band, orders=range(1, args.max_order + 1))
-    t_stab, c_stab = time.perf_counter() - t0, time.process_time() - c0
-    t0, c0 = time.perf_counter(), time.process_time()
-    res = modal.identify(h, *band, orders=range(1, args.max_order + 1))
-    t_ident, c_ident = time.perf_counter() - t0, time.process_time() - c0
-    e_f, e_z = errors(res.fn_hz, res.zeta, fn, zeta)
-    print(f"mvtk  plscf (stabilisation, {d.pole.size} poles): wall {t_stab:7.2f} s, "
-          f"cpu {c_stab:7.2f} s")
-    print(f"mvtk  identify (plscf + selection + LSFD + quality): wall {t_ident:7.2f} s, "
-          f"cpu {c_ident:7.2f} s; {res.n_modes} modes, max df/f {e_f:.1e}, "
-          f"max dz/z {e_z:.1e}")
-    try:
-        from sdypy import EMA
-    except ImportError:
-        print("sdypy-EMA not installed (pip install sdypy-EMA): no comparison")
-        return
+
+def _run_mvtk(h, band, max_order):
+    orders = range(1, max_order + 1)
+    d, t_stab, c_stab = _timed(lambda: modal.plscf(h, *band, orders=orders))
+    res, t_id, c_id = _timed(lambda: modal.identify(h, *band, orders=orders))
+    return d, res, (t_stab, c_stab, t_id, c_id)
+
+
+def _run_sdypy(EMA, h, band, max_order, fn):
+    n_lines = h.sizes["frequency"]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         t0, c0 = time.perf_counter(), time.process_time()
         m = EMA.Model(frf=h.values.reshape(-1, n_lines), freq=h["frequency"].values,
-                      lower=band[0], upper=band[1], pol_order_high=args.max_order,
+                      lower=band[0], upper=band[1], pol_order_high=max_order,
                       frf_form="accelerance")
         m.get_poles(show_progress=False)
         t_pe, c_pe = time.perf_counter() - t0, time.process_time() - c0
         m.select_closest_poles(fn, f_window=4)
         m.get_constants(whose_poles="own")
         t_all, c_all = time.perf_counter() - t0, time.process_time() - c0
+    return m, (t_pe, c_pe, t_all, c_all)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--max-order", type=int, default=80)
+    ap.add_argument("--repeat", type=int, default=3,
+                    help="interleaved runs of both libraries (medians are reported)")
+    args = ap.parse_args()
+    n_resp, n_lines = (12, 1000) if args.quick else (60, 4000)
+    h, fn, zeta = make_data(n_resp, 3, n_lines)
+    band = (10.0, 490.0)
+    print(f"data: {n_resp} responses x 3 references x {n_lines} lines; 15 modes; "
+          f"orders up to {args.max_order}; {args.repeat} interleaved run(s)")
+    try:
+        from sdypy import EMA
+    except ImportError:
+        EMA = None
+        print("sdypy-EMA not installed (pip install sdypy-EMA): mvtk timings only")
+    mv, sd = [], []
+    for k in range(max(1, args.repeat)):
+        d, res, t = _run_mvtk(h, band, args.max_order)
+        mv.append(t)
+        line = (f"run {k + 1}: mvtk stabilisation wall {t[0]:5.2f} s cpu {t[1]:5.2f} s, "
+                f"+ selection + LSFD + quality wall {t[2]:5.2f} s cpu {t[3]:5.2f} s")
+        if EMA is not None:
+            m, u = _run_sdypy(EMA, h, band, args.max_order, fn)
+            sd.append(u)
+            line += (f" | sdypy-EMA LSCF wall {u[0]:5.2f} s cpu {u[1]:5.2f} s, + LSFD wall "
+                     f"{u[2]:5.2f} s cpu {u[3]:5.2f} s | ratio stab+LSFD wall "
+                     f"{u[2] / t[2]:4.1f} x cpu {u[3] / t[3]:4.1f} x")
+        print(line, flush=True)
+    mv = np.median(np.array(mv), axis=0)
+    e_f, e_z = errors(res.fn_hz, res.zeta, fn, zeta)
+    print(f"mvtk  plscf (stabilisation, {d.pole.size} poles): median wall {mv[0]:6.2f} s, "
+          f"cpu {mv[1]:6.2f} s")
+    print(f"mvtk  identify (plscf + selection + LSFD + quality): median wall {mv[2]:6.2f} s, "
+          f"cpu {mv[3]:6.2f} s; {res.n_modes} modes, max df/f {e_f:.1e}, max dz/z {e_z:.1e}")
+    if EMA is None:
+        return
+    sd = np.median(np.array(sd), axis=0)
     p_f, p_z = errors(m.nat_freq, m.nat_xi, fn, zeta)
-    print(f"sdypy-EMA get_poles (LSCF, orders up to {args.max_order}): wall {t_pe:7.2f} s, "
-          f"cpu {c_pe:7.2f} s")
-    print(f"sdypy-EMA get_poles + select + get_constants (LSFD): wall {t_all:7.2f} s, "
-          f"cpu {c_all:7.2f} s; max df/f {p_f:.1e}, max dz/z {p_z:.1e}")
+    print(f"sdypy-EMA get_poles (LSCF, orders up to {args.max_order}): median wall "
+          f"{sd[0]:6.2f} s, cpu {sd[1]:6.2f} s")
+    print(f"sdypy-EMA get_poles + select + get_constants (LSFD): median wall {sd[2]:6.2f} s, "
+          f"cpu {sd[3]:6.2f} s; max df/f {p_f:.1e}, max dz/z {p_z:.1e}")
     # the same number of poles as sdypy-EMA at order 80: poly-reference order p gives
     # p * n_reference poles, so order 80 // 3 = 26 gives 78 poles per order
     n_ref = h.sizes["reference"]
-    t0, c0 = time.perf_counter(), time.process_time()
-    res_eq = modal.identify(h, *band, orders=range(1, args.max_order // n_ref + 1))
-    t_eq, c_eq = time.perf_counter() - t0, time.process_time() - c0
+    res_eq, t_eq, c_eq = _timed(lambda: modal.identify(
+        h, *band, orders=range(1, args.max_order // n_ref + 1)))
     q_f, q_z = errors(res_eq.fn_hz, res_eq.zeta, fn, zeta)
     print(f"mvtk  identify with orders up to {args.max_order // n_ref} (<= {args.max_order} "
-          f"poles per order, as sdypy-EMA): wall {t_eq:7.2f} s, cpu {c_eq:7.2f} s; "
+          f"poles per order, as sdypy-EMA): wall {t_eq:6.2f} s, cpu {c_eq:6.2f} s; "
           f"{res_eq.n_modes} modes, max df/f {q_f:.1e}, max dz/z {q_z:.1e}; speed-up wall "
-          f"{t_all / t_eq:5.1f} x, cpu {c_all / c_eq:5.1f} x")
-    print(f"speed-up (sdypy-EMA / mvtk), stabilisation: wall {t_pe / t_stab:5.1f} x, cpu "
-          f"{c_pe / c_stab:5.1f} x;  stabilisation + LSFD: wall {t_all / t_ident:5.1f} x, "
-          f"cpu {c_all / c_ident:5.1f} x  (target >= 3 x)")
+          f"{sd[2] / t_eq:5.1f} x, cpu {sd[3] / c_eq:5.1f} x")
+    print(f"speed-up of the medians (sdypy-EMA / mvtk), stabilisation: wall "
+          f"{sd[0] / mv[0]:5.1f} x, cpu {sd[1] / mv[1]:5.1f} x;  stabilisation + LSFD: wall "
+          f"{sd[2] / mv[2]:5.1f} x, cpu {sd[3] / mv[3]:5.1f} x  (target >= 3 x)")
 
 
 if __name__ == "__main__":

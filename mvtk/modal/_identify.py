@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._lsfd import lsfd, synthesise
+from ._lsfd import lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
 from ._result import IdentifiedModes
@@ -66,14 +66,26 @@ def _driving_point(h):
     return None
 
 
+MIN_SUPPORT = 2.0
+"""A mode must at least halve the LSFD misfit within ``fn +- max(5 lines, 2 zeta fn)``."""
+
+
 def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None,
-                  contribution=None, min_contribution=0.1, local=None, min_local=0.8):
+                  contribution=None, min_contribution=0.1, local=None, min_local=0.8,
+                  support=None, min_support=MIN_SUPPORT, half_hz=None):
     """``reliable`` and ``reason`` per mode from the stated criteria."""
     reliable, reason = [], []
-    contribution = np.full(len(fn), np.nan) if contribution is None else contribution
-    local = np.full(len(fn), np.nan) if local is None else local
-    for f, z, m, c, q, loc in zip(fn, zeta, mpc_v, count, contribution, local):
+    nan = np.full(len(fn), np.nan)
+    contribution = nan if contribution is None else contribution
+    local = nan if local is None else local
+    support = nan if support is None else support
+    half_hz = nan if half_hz is None else half_hz
+    for f, z, m, c, q, loc, sup, hw in zip(fn, zeta, mpc_v, count, contribution, local,
+                                           support, half_hz):
         why = []
+        if np.isfinite(sup) and sup < min_support:
+            why.append(f"not needed by the data: LSFD misfit within +-{hw:.3g} Hz without/"
+                       f"with the mode {sup:.2f} (< {min_support:g})")
         if np.isfinite(loc) and loc < min_local:
             why.append(f"measured vs synthesised FRF correlation {loc:.2f} < {min_local:g} "
                        "around the mode (noise fitted?)")
@@ -172,13 +184,17 @@ def _contribution(fit, h):
     return out
 
 
-def _local_correlation(Hm, Hs, f, fn, zeta):
-    """Measured vs synthesised correlation over ``fn +- max(5 lines, 2 zeta fn)``."""
+def _windows(f, fn, zeta):
+    """Lines within ``fn +- max(5 lines, 2 zeta fn)`` of each mode (bool per line)."""
     df = float(np.median(np.diff(f)))
-    out = np.empty(len(fn))
-    for m, (f0, z) in enumerate(zip(fn, zeta)):
-        half = max(5 * df, 2 * abs(z) * f0)
-        k = (f >= f0 - half) & (f <= f0 + half)
+    half = np.maximum(5 * df, 2 * np.abs(zeta) * fn)
+    return [(f >= f0 - h) & (f <= f0 + h) for f0, h in zip(fn, half)], half
+
+
+def _local_correlation(Hm, Hs, windows):
+    """Measured vs synthesised correlation over each mode's window."""
+    out = np.empty(len(windows))
+    for m, k in enumerate(windows):
         a, b = Hm[..., k], Hs[..., k]
         den = np.sum(np.abs(a) ** 2) * np.sum(np.abs(b) ** 2)
         out[m] = np.abs(np.sum(a * np.conj(b))) ** 2 / den if den > 0 else np.nan
@@ -189,11 +205,19 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     """LSFD on the selected poles and everything the result table needs."""
     f = h["frequency"].values
     kind = h.attrs.get("frf_type", "other")
-    fit = lsfd(h.values, f, sel.pole, kind, residuals=residuals)
-    nm = sel.pole.size
-    no = h.sizes["response"]
     fn = np.abs(sel.pole) / (2 * np.pi)
     zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
+    windows, half = _windows(f, fn, zeta)
+    Hv = h.values
+    finite = np.all(np.isfinite(Hv), axis=(0, 1))
+    fit, (r_with, r_without, _) = lsfd_with_misfit(
+        Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0), f, sel.pole, kind,
+        [w & finite for w in windows], residuals=residuals)
+    # support: misfit without / with the mode within its window
+    with np.errstate(divide="ignore", invalid="ignore"):
+        support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
+    nm = sel.pole.size
+    no = h.sizes["response"]
     psi = np.zeros((nm, no), complex)
     part = np.zeros((nm, h.sizes["reference"]), complex)
     for m in range(nm):
@@ -229,9 +253,10 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     syn.name = "frf_synthesised"
     # lines where either FRF is not finite (the residual terms of a band that starts at
     # 0 Hz are infinite there) take no part in the correlation
-    ok = np.isfinite(h.values) & np.isfinite(syn_v)
-    Hm = np.where(ok, h.values, 0.0)
-    Sv = np.where(ok, syn_v, 0.0)
+    bad = ~(np.isfinite(h.values) & np.isfinite(syn_v))
+    Hm, Sv = h.values, syn_v
+    if bad.any():
+        Hm, Sv = np.where(bad, 0.0, Hm), np.where(bad, 0.0, Sv)
     num = np.abs(np.sum(Hm * np.conj(Sv), axis=(1, 2))) ** 2
     den = np.sum(np.abs(Hm) ** 2, axis=(1, 2)) * np.sum(np.abs(Sv) ** 2, axis=(1, 2))
     corr = xr.DataArray(np.where(den > 0, num / np.where(den > 0, den, 1), 0.0),
@@ -245,14 +270,15 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     need = clus.min_count
     df = float(np.median(np.diff(f)))
     contrib = _contribution(fit, h)
-    local = _local_correlation(h.values, syn_v, f, fn, zeta)
+    local = _local_correlation(h.values, syn_v, windows)
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
                                      stab.zeta_max, df_hz=df, contribution=contrib,
-                                     local=local)
+                                     local=local, support=support, half_hz=half)
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
         stability_count=sel.count, reliable=reliable, reason=reason, frf=h,
         synthesised=syn, correlation=corr, residue=fit.residue,
         lower_residual=fit.lower, upper_residual=fit.upper, diagram=diagram,
+        support=support,
     )

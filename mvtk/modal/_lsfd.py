@@ -5,11 +5,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from ..errors import ParameterError
 from ._frf import FRF_TYPES
 
-__all__ = ["lsfd", "LsfdFit", "synthesise"]
+__all__ = ["lsfd", "LsfdFit", "synthesise", "local_misfit"]
 
 
 @dataclass(frozen=True)
@@ -45,13 +46,97 @@ def synthesise(fit: LsfdFit, f_hz) -> np.ndarray:
     """FRFs ``(n_response, n_reference, n_frequency)`` of the fitted model at ``f_hz``."""
     w = 2 * np.pi * np.asarray(f_hz, dtype=float)
     iw = 1j * w
+    nm = fit.pole.size
+    shape = fit.residue.shape[1:]
     with np.errstate(divide="ignore", invalid="ignore"):
-        out = np.zeros(fit.residue.shape[1:] + (w.size,), complex)
-        for lam, A in zip(fit.pole, fit.residue):
-            out += A[..., None] / (iw - lam) + np.conj(A)[..., None] / (iw - np.conj(lam))
-        out += fit.lower[..., None] / iw**2 + fit.upper[..., None]
-        out *= iw**fit.power
-    return out
+        # modal terms as one product: (n_FRF, 2 n_modes + 2) coefficients times the
+        # (2 n_modes + 2, n_frequency) basis of poles, conjugate poles and residuals
+        basis = np.empty((2 * nm + 2, w.size), complex)
+        basis[:nm] = 1.0 / (iw[None, :] - fit.pole[:, None])
+        basis[nm:2 * nm] = 1.0 / (iw[None, :] - np.conj(fit.pole)[:, None])
+        basis[-2] = 1.0 / iw**2
+        basis[-1] = 1.0
+        coef = np.concatenate([fit.residue.reshape(nm, -1).T,
+                               np.conj(fit.residue).reshape(nm, -1).T,
+                               fit.lower.reshape(-1, 1), fit.upper.reshape(-1, 1)], axis=1)
+        out = (coef.astype(complex) @ basis) * iw**fit.power
+    return out.reshape(shape + (w.size,))
+
+
+def _system(H, f_hz, lam, frf_type, residuals):
+    """Real least-squares system of LSFD: column-normalised basis, right-hand sides.
+
+    Returns ``(A / colnorm, colnorm, rhs, keep)``: rows are the real then the imaginary
+    parts of the kept lines ``keep``, columns the real/imaginary residue parts of each
+    pole then the lower and upper residuals; ``rhs`` has one column per FRF.
+    """
+    f = np.asarray(f_hz, dtype=float)
+    power = FRF_TYPES.get(frf_type, 0)
+    keep = f > 0 if residuals else np.ones(f.size, bool)
+    w = 2 * np.pi * f[keep]
+    ncoef = 2 * lam.size + (2 if residuals else 0)
+    if 2 * w.size < ncoef:
+        raise ParameterError(
+            f"lsfd: {w.size} lines cannot determine {ncoef} real coefficients per FRF"
+        )
+    B = _basis(w, lam, power, residuals)
+    A = np.vstack([B.real, B.imag])
+    colnorm = np.linalg.norm(A, axis=0)
+    colnorm[colnorm == 0] = 1.0
+    Y = H[:, :, keep].reshape(H.shape[0] * H.shape[1], -1).T
+    return A / colnorm, colnorm, np.vstack([Y.real, Y.imag]), keep
+
+
+def local_misfit(H, f_hz, poles, frf_type, windows, *, residuals: bool = True):
+    """LSFD misfit within each mode's window, with and without that mode in the model.
+
+    For mode ``m`` the FRFs are fitted once with all poles and once with every pole but
+    ``m`` (same residual terms, all lines of the band); both fits are then compared
+    with the measured FRFs on the lines of ``windows[m]`` only. One QR factorisation of
+    the shared basis serves all modes: dropping the two columns of mode ``m`` leaves a
+    small ``(n_coef, n_coef - 2)`` least-squares problem in the triangular factor.
+
+    Parameters
+    ----------
+    H, f_hz, poles, frf_type, residuals
+        As for :func:`lsfd`.
+    windows : sequence of bool arrays, one per pole
+        Lines (of ``f_hz``) on which the misfit of that mode is measured.
+
+    Returns
+    -------
+    with_mode, without_mode, energy : numpy.ndarray
+        ``sum |H - H_fit|^2`` over the window for the full model and for the model
+        without the mode, and ``sum |H|^2`` over the window (units of ``|H|^2``).
+    """
+    H = np.asarray(H)
+    lam = np.atleast_1d(np.asarray(poles, dtype=complex))
+    A, _, rhs, keep = _system(H, f_hz, lam, frf_type, residuals)
+    return _misfits(_factor(A, rhs), A, rhs, keep, windows)
+
+
+def _factor(A, rhs):
+    """``(R, Q^T rhs, x)``: economic QR of the basis and the least-squares solution."""
+    Q, R = np.linalg.qr(A)
+    c = Q.T @ rhs
+    # rank-revealing solve (QR with column pivoting) on the small triangular factor
+    x = scipy.linalg.lstsq(R, c, lapack_driver="gelsy", check_finite=False)[0]
+    return R, c, x
+
+
+def _misfits(qr, A, rhs, keep, windows):
+    R, c, x_all = qr
+    nk = int(keep.sum())
+    out = np.zeros((3, len(windows)))
+    for m, win in enumerate(windows):
+        lines = np.flatnonzero(np.asarray(win)[keep])
+        rows = np.concatenate([lines, lines + nk])
+        cols = np.setdiff1d(np.arange(A.shape[1]), [2 * m, 2 * m + 1])
+        x0 = scipy.linalg.lstsq(R[:, cols], c, lapack_driver="gelsy", check_finite=False)[0]
+        out[0, m] = np.sum((A[rows] @ x_all - rhs[rows]) ** 2)
+        out[1, m] = np.sum((A[rows][:, cols] @ x0 - rhs[rows]) ** 2)
+        out[2, m] = np.sum(rhs[rows] ** 2)
+    return out[0], out[1], out[2]
 
 
 def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True) -> LsfdFit:
@@ -78,30 +163,33 @@ def lsfd(H, f_hz, poles, frf_type: str = "receptance", *, residuals: bool = True
         Fit the lower (``LR / (i w)^2``, modes below the band) and upper (``UR``, modes
         above) residual terms.
     """
+    return _fit(H, f_hz, poles, frf_type, residuals)[0]
+
+
+def _fit(H, f_hz, poles, frf_type, residuals):
+    """LSFD fit plus what :func:`_misfits` needs (basis, right-hand sides, QR)."""
     H = np.asarray(H)
-    f = np.asarray(f_hz, dtype=float)
     lam = np.atleast_1d(np.asarray(poles, dtype=complex))
+    A, colnorm, rhs, keep = _system(H, f_hz, lam, frf_type, residuals)
     power = FRF_TYPES.get(frf_type, 0)
-    keep = f > 0 if residuals else np.ones(f.size, bool)
-    w = 2 * np.pi * f[keep]
     nm = lam.size
-    ncoef = 2 * nm + (2 if residuals else 0)
-    if 2 * w.size < ncoef:
-        raise ParameterError(
-            f"lsfd: {w.size} lines cannot determine {ncoef} real coefficients per FRF"
-        )
-    B = _basis(w, lam, power, residuals)
-    A = np.vstack([B.real, B.imag])
-    colnorm = np.linalg.norm(A, axis=0)
-    colnorm[colnorm == 0] = 1.0
+    ncoef = A.shape[1]
     no, ni = H.shape[:2]
-    Y = H[:, :, keep].reshape(no * ni, -1).T
-    rhs = np.vstack([Y.real, Y.imag])
-    x = np.linalg.lstsq(A / colnorm, rhs, rcond=None)[0] / colnorm[:, None]
+    # one QR factorisation of the shared basis serves all n_response * n_reference
+    # right-hand sides
+    qr = _factor(A, rhs)
+    x = qr[2] / colnorm[:, None]
     x = x.T.reshape(no, ni, ncoef)
     res = x[..., 0:2 * nm:2] + 1j * x[..., 1:2 * nm:2]        # (no, ni, nm)
     if residuals:
         lower, upper = x[..., -2], x[..., -1]
     else:
         lower = upper = np.zeros((no, ni))
-    return LsfdFit(lam, np.moveaxis(res, -1, 0), lower, upper, power)
+    fit = LsfdFit(lam, np.moveaxis(res, -1, 0), lower, upper, power)
+    return fit, A, rhs, keep, qr
+
+
+def lsfd_with_misfit(H, f_hz, poles, frf_type, windows, *, residuals=True):
+    """:func:`lsfd` and :func:`local_misfit` from one factorisation of the basis."""
+    fit, A, rhs, keep, qr = _fit(H, f_hz, poles, frf_type, residuals)
+    return fit, _misfits(qr, A, rhs, keep, windows)

@@ -125,7 +125,11 @@ def plscf(
     # lag sums: rho (R), sigma (S_o), tau (sum_o T_o)
     rho = _lag_sums(zk, np.ones((nf, 1)))[:, :, None]                      # (2P+1, 1, 1)
     sig = _lag_sums(zk, Hs.reshape(no * ni, nf).T)                         # (2P+1, no*ni)
-    q = np.einsum("oif,ojf->fij", np.conj(Hs), Hs).reshape(nf, ni * ni)
+    q = np.empty((nf, ni, ni), complex)
+    for i in range(ni):
+        for j in range(ni):
+            q[:, i, j] = np.sum(np.conj(Hs[:, i]) * Hs[:, j], axis=0)
+    q = q.reshape(nf, ni * ni)
     tau = _lag_sums(zk, q).reshape(2 * P + 1, ni, ni)
     R = _toeplitz_blocks(rho, P + 1, (1, 1))
     R[np.diag_indices_from(R)] += 1e-12 * np.trace(R) / R.shape[0]
@@ -181,7 +185,8 @@ def plscf(
         if ni > 1 and mu.size:
             pw = mu[:, None] ** np.arange(p + 1)[None, :]
             coef = np.concatenate([blocks, np.eye(ni)[None]], axis=0)   # (p+1, ni, ni)
-            dmat = np.einsum("kr,rij->kji", pw, coef)                   # D(mu)^T
+            dmat = (pw @ coef.reshape(p + 1, ni * ni)).reshape(-1, ni, ni)
+            dmat = dmat.transpose(0, 2, 1)                              # D(mu)^T
             vec = np.conj(np.linalg.svd(dmat)[2][:, -1, :])
         else:
             vec = np.ones((mu.size, 1), complex)

@@ -55,6 +55,11 @@ class IdentifiedModes:
         Real residual terms ``(n_response, n_reference)`` of the LSFD fit.
     diagram : StabilisationDiagram
         The stabilisation diagram the poles were selected from.
+    support : numpy.ndarray or None
+        Evidence that the data need each mode (pLSCF+LSFD): the LSFD misfit
+        ``sum |H - H_fit|^2`` within ``fn +- max(5 lines, 2 zeta fn)`` of a fit without
+        the mode divided by that of the full fit (``inf`` for an exact fit). Below 2
+        the mode is marked not reliable. ``None`` (SSI-cov: no FRFs).
     """
 
     method: str
@@ -76,6 +81,7 @@ class IdentifiedModes:
     lower_residual: np.ndarray | None
     upper_residual: np.ndarray | None
     diagram: StabilisationDiagram
+    support: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -83,12 +89,15 @@ class IdentifiedModes:
         return int(self.fn_hz.size)
 
     def to_dataframe(self) -> pd.DataFrame:
-        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count reliable reason``."""
+        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support reliable
+        reason`` (``support`` NaN where it does not apply, e.g. SSI-cov)."""
+        support = (np.full(self.n_modes, np.nan) if self.support is None
+                   else np.asarray(self.support, dtype=float))
         return pd.DataFrame({
             "mode": np.arange(1, self.n_modes + 1),
             "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
-            "stability_count": self.stability_count, "reliable": self.reliable,
-            "reason": list(self.reason),
+            "stability_count": self.stability_count, "support": support,
+            "reliable": self.reliable, "reason": list(self.reason),
         })
 
     def automac(self, real: bool = False) -> xr.DataArray:

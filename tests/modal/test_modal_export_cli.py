@@ -54,7 +54,9 @@ def test_cli_json_and_exports(msys, tmp_path, capsys):
     assert out["method"] == "pLSCF+LSFD" and len(out["modes"]) == 4
     np.testing.assert_allclose([m["fn_hz"] for m in out["modes"]], res.fn_hz, rtol=1e-6)
     assert set(out["modes"][0]) >= {"fn_hz", "zeta", "mpc", "mpd", "stability_count",
-                                    "reliable", "reason"}
+                                    "support", "reliable", "reason"}
+    # support is a number (JSON null only for an exact fit or where it does not apply)
+    assert all(m["support"] is None or m["support"] > 2 for m in out["modes"])
     assert (tmp_path / "m.uff").exists() and (tmp_path / "s.uff").exists()
     rc = main(["modal", str(p), "--fmin", "2", "--fmax", "115", "--fn", "500"])
     assert rc == 2
