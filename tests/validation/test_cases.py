@@ -11,7 +11,8 @@ from mvtk.errors import ParameterError
 from mvtk.validation import ValidationCase, run_validation, validation_cases
 
 CASES = validation_cases()
-AREAS = ("io", "signal", "damping", "modal", "fe", "correlation", "reduction", "control")
+AREAS = ("io", "signal", "damping", "modal", "fe", "updating", "correlation", "reduction",
+         "control")
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
