@@ -119,7 +119,7 @@ def test_validation_page_lists_every_registry_case(tmp_path):
     for case in validation_cases():
         assert f"### `{case.name}`" in page, case.name
         assert f"[`{case.name}`](#" in page, case.name  # in the summary table
-        assert " ".join(case.source.split()) in page, case.name
+        assert " ".join(case.source.split()) in page, case.name  # in its section
     n_data = sum(bool(c.data) for c in cases)
     assert f"{len(cases)} cases, {len(cases) - n_data} pass, 0 fail, {n_data} not run" in page
     assert "**FAIL**" not in page

@@ -188,6 +188,16 @@ def _case_verdict(rows) -> str:
     return _cell(next(iter(statuses)).split(":")[0])
 
 
+def _truth_kind(source: str) -> str:
+    """Short kind of the external truth, for the summary table."""
+    low = source.lower()
+    for prefix, kind in (("shared/data", "real file"), ("peer", "peer library"),
+                         ("closed form", "closed form"), ("exact", "exact property")):
+        if low.startswith(prefix):
+            return kind
+    return "published benchmark"
+
+
 def _worst_error(rows) -> str:
     from mvtk.report import format_number
 
@@ -251,7 +261,7 @@ def validation_page(table=None, *, seconds: float | None = None) -> str:
         rows = table[table["case"] == name]
         first = rows.iloc[0]
         out.append(f"| [`{name}`](#{name.replace('.', '-').replace('_', '-')}) | "
-                   f"{first['area']} | {_cell(first['source'])} | {_worst_error(rows)} | "
+                   f"{first['area']} | {_truth_kind(first['source'])} | {_worst_error(rows)} | "
                    f"{_cell(first['tolerance'])} | {status[name]} |")
     out.append("")
     for area in dict.fromkeys(table["area"]):
