@@ -17,8 +17,8 @@ def _init(args: argparse.Namespace) -> int:
     if args.structure is None:
         print(f"wrote {res.structure} (a placeholder plate: edit it to your structure)")
     elif res.structure.resolve() != Path(args.structure).resolve():
-        print(f"wrote {res.structure} around {args.structure} (edit its material, sections "
-              "and supports)")
+        print(f"wrote {res.structure} around {args.structure}: edit what it marks EDIT, then "
+              f"check it with `mvtk modes {res.structure} -n 6`")
     for t in res.tests:
         what = t["kind"] if t["kind"] != "skipped" else f"skipped: {t['why']}"
         print(f"  {t['file']}: {what}")

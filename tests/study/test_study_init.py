@@ -85,9 +85,16 @@ PANEL = ROOT / "data" / "structures" / "curved_panel"
 IMPACT = [DATA / "SYNTHETIC_smart_beam_impact.csv"]
 
 
-def test_init_around_a_bare_mesh_lists_the_physical_groups(tmp_path):
-    res = init_study(tmp_path / "m", structure=PANEL / "curved_panel.msh")
-    assert res.structure == tmp_path / "m" / "structure.toml"
+def test_init_around_a_bare_mesh_lists_the_physical_groups(tmp_path, capsys):
+    assert main(["init", str(tmp_path / "m"), "--structure", str(PANEL / "curved_panel.msh")]
+                ) == 0
+    out = capsys.readouterr().out
+    assert f"wrote {tmp_path / 'm' / 'structure.toml'} around " in out
+    assert "then check it with `mvtk modes" in out
+    from types import SimpleNamespace
+
+    res = SimpleNamespace(structure=tmp_path / "m" / "structure.toml",
+                          study=tmp_path / "m" / "study.toml")
     text = res.structure.read_text(encoding="utf-8")
     # the surface group gets a shell section, the line groups are commented candidates
     assert 'sections = { skin = "skin" }' in text
