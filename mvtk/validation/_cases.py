@@ -4,8 +4,8 @@ Each :class:`ValidationCase` names a published benchmark, a closed form, a peer 
 a real file of someone else's instrument, states its reference values and tolerance, and
 carries the function that computes mvtk's current values. The same registry is
 
-- asserted case by case by ``tests/validation/test_cases.py`` (each case is a test that can
-  fail), and
+- asserted case by case by ``tests/validation/test_validation_cases.py`` (each case is a
+  test that can fail), and
 - run by the documentation build (``docs/_ext/mvtk_docs.py``), which writes the validation
   evidence page from :func:`run_validation` (reference, current value, error, tolerance and
   verdict per case), so the page always shows the numbers of the code it documents.

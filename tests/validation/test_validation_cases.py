@@ -15,7 +15,9 @@ AREAS = ("io", "signal", "damping", "modal", "fe", "updating", "correlation", "r
          "control")
 
 
-@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+@pytest.mark.parametrize("case", [
+    pytest.param(c, id=c.name, marks=[pytest.mark.shared_data] if c.data else [])
+    for c in CASES])
 def test_case_within_tolerance(case, request):
     data_dir = request.getfixturevalue("shared_data") if case.data else None
     checks = case.checks(data_dir)
