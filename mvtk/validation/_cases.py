@@ -86,6 +86,10 @@ class ValidationCase:
             raise ParameterError(
                 f"validation case {self.name!r}: {len(self.labels)} labels but "
                 f"{len(self.reference)} reference values")
+        if self.kind not in ("relative", "absolute", "upper", "lower"):
+            raise ParameterError(
+                f"validation case {self.name!r}: kind must be 'relative', 'absolute', "
+                f"'upper' or 'lower', got {self.kind!r}")
 
     def checks(self, data_dir: str | Path | None = None) -> list[Check]:
         """Run the case: one :class:`~mvtk.validation.Check` per compared quantity.

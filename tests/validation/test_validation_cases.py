@@ -73,6 +73,7 @@ def test_bad_case_definitions():
         ValidationCase("x.case", "x", "t", "s", ("a", "b"), (1.0,), 1e-3, lambda: [1.0])
     with pytest.raises(ParameterError, match=r"'x.case': computed 2 values for 1 labels"):
         _case(lambda: [1.0, 2.0]).checks()
-    with pytest.raises(ParameterError, match="kind must be one of"):
-        _case(lambda: [1.0], kind="roughly").checks()
+    with pytest.raises(ParameterError, match=r"'x.case': kind must be 'relative', 'absolute', "
+                       r"'upper' or 'lower', got 'roughly'"):
+        _case(lambda: [1.0], kind="roughly")
     assert isinstance(run_validation([]), pd.DataFrame)
