@@ -384,6 +384,7 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
     kinds = {n: set(k) for n, k in m.element_sets.items()}
     shells = [n for n, k in kinds.items() if k and k <= {"tri3", "quad4"}]
     lines_ = [n for n, k in kinds.items() if "line2" in k and not k & {"tri3", "quad4"}]
+    mixed = [n for n, k in kinds.items() if "line2" in k and k & {"tri3", "quad4"}]
     if not shells:
         found = ", ".join(f"{n} ({'/'.join(sorted(k))})" for n, k in kinds.items()) or "none"
         raise ConfigError(
@@ -427,6 +428,9 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
     if lines_:
         out.append("# candidates with line cells (a beam section, or only an edge to support):")
         out += [f"#   {_toml_key(n)} = \"{beam_sec[n]}\"   ({size(n)})" for n in lines_]
+    if mixed:
+        out.append("# sets mixing surface and line cells (split them in the mesher to use them): "
+                   + ", ".join(f"{n} ({size(n)})" for n in mixed))
     out.append("")
     for n in shells:
         out += [f"[sections.{shell_sec[n]}]   # element set {n!r}: {size(n)}",

@@ -182,3 +182,23 @@ def test_mvtk_run_accepts_init_on_a_bare_mesh_once_supported(tmp_path):
     assert 'path = "materials.steel.E"' in study and "lower = 1.05e+11" in study
     out = _run_ok(tmp_path / "m" / "study.toml", tmp_path / "m" / "report")
     assert "updating" in out.results
+
+
+def test_init_mesh_lists_sets_mixing_surface_and_line_cells(tmp_path, monkeypatch):
+    import numpy as np
+
+    import mvtk.fe
+    from mvtk.fe import ImportedMesh
+    from mvtk.study._init import mesh_structure_toml
+
+    mesh = ImportedMesh(
+        np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0.0]]),
+        {"quad4": np.array([[0, 1, 2, 3]]), "line2": np.array([[1, 4]])},
+        {"plate": {"quad4": np.array([0])},
+         "both": {"quad4": np.array([0]), "line2": np.array([0])}},
+        {"plate": np.arange(4), "both": np.arange(5)})
+    monkeypatch.setattr(mvtk.fe, "read_mesh", lambda path: mesh)
+    text = mesh_structure_toml(tmp_path / "part.inp", tmp_path)
+    assert 'sections = { plate = "plate" }' in text
+    assert ("# sets mixing surface and line cells (split them in the mesher to use them): "
+            "both (1 quad4, 1 line2)") in text
