@@ -123,6 +123,7 @@ def test_validation_page_lists_every_registry_case(tmp_path):
     n_data = sum(bool(c.data) for c in cases)
     assert f"{len(cases)} cases, {len(cases) - n_data} pass, 0 fail, {n_data} not run" in page
     assert "**FAIL**" not in page
+    assert mvtk_docs.failing_cases(table) == []  # not run is not a failure
 
 
 def test_validation_page_shows_a_failing_case():
@@ -133,3 +134,5 @@ def test_validation_page_shows_a_failing_case():
     line = next(x for x in page.splitlines() if x.startswith("| [`fe.nafems_fv2`]"))
     assert line.endswith("| **FAIL** |") and "| 100 % |" in line
     assert "1 fail" in page
+    table = run_validation(cases)
+    assert mvtk_docs.failing_cases(table) == ["fe.nafems_fv2"]
