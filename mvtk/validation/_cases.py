@@ -152,6 +152,21 @@ def _lvm_acceleration(root: Path):
     return [vals[0].sum(), vals[1].sum(), vals[1].max(), float(np.argmax(vals[1]))]
 
 
+def _tdms_sum(root: Path):
+    import mvtk.io
+
+    th = mvtk.io.read(root / "tdms" / "good_tdms_1.tdms")["time_history"]
+    return [float(th.values.astype(np.float64).sum()), float(th.attrs["fs"])]
+
+
+def _uff55_complex_mode(root: Path):
+    import mvtk.io
+
+    ms = mvtk.io.read(root / "uff" / "uff55_sample_test_record10.uff")["mode_shape"]
+    lam = complex(ms.eigenvalue.item())
+    return [lam.real, lam.imag]
+
+
 def _mat_case1_peak(root: Path):
     import scipy.io
 
@@ -269,6 +284,30 @@ def _ssss_thin_plate():
     model = plate_model(1.0, 1.0, [Ply(_steel(), h)], nx=24, ny=24, supports=ssss)
     lam = 2 * np.pi * modal_analysis(model, 4).fn_hz * _kirchhoff_lambda(h)
     return [lam[0], lam[1], lam[3]]
+
+
+def _leissa_ffff():
+    from mvtk.fe import Ply, modal_analysis, plate_model
+
+    h = 1e-3
+    res = modal_analysis(plate_model(1.0, 1.0, [Ply(_steel(), h)], nx=20, ny=20), 9)
+    return 2 * np.pi * res.fn_hz[6:] * _kirchhoff_lambda(h)  # after the six rigid modes
+
+
+def _smits_bimorph():
+    from mvtk.fe import PiezoMaterial, Ply, factorize
+    from mvtk.fe._beam import cantilever_beam
+    from mvtk.fe._piezo import PiezoPatch
+
+    pic151 = PiezoMaterial("PIC151", 66.667e9, 0.34, 7800.0, d31=-210e-12)
+    L, b, t, V = 0.03, 0.005, 0.25e-3, 10.0
+    lay = (Ply(pic151, t), Ply(pic151, t))
+    model = cantilever_beam(L, b, lay, 8)
+    top = PiezoPatch("top", lay, 1, ("clamp", "tip"), b)
+    bottom = PiezoPatch("bottom", lay, 0, ("clamp", "tip"), b)
+    u = factorize(model.K).solve(top.load_vector(model, V / 2)
+                                 + bottom.load_vector(model, -V / 2))
+    return [u[model.dof_index(model.node_set("tip")[0], "uz")]]
 
 
 def _navier_cross_ply_omega(E1, E2, G12, G13, G23, nu12, rho, a, h, ks=5.0 / 6.0):
@@ -517,6 +556,19 @@ def validation_cases() -> tuple[ValidationCase, ...]:
             1e-9, _lvm_acceleration, "",
             data=("lvm/acceleration.lvm",)),
         ValidationCase(
+            "io.tdms_tower_accelerations", "io",
+            "NI TDMS, 8 float32 accelerometer channels of an offshore wind turbine tower: "
+            "total sum (in float64) and sampling rate",
+            "shared/data PROVENANCE.md (values read with npTDMS 1.13)",
+            ("sum of all channels (g)", "fs (Hz)"), (-15.5978486, 30.0), 1e-7, _tdms_sum,
+            data=("tdms/good_tdms_1.tdms",)),
+        ValidationCase(
+            "io.uff55_complex_mode", "io",
+            "UFF 55 complex mode (pyuff sample record): eigenvalue",
+            "shared/data PROVENANCE.md: eigenvalue -0.1111111 + 41.11111j",
+            ("real part (1/s)", "imaginary part (rad/s)"), (-0.1111111, 41.11111), 1e-6,
+            _uff55_complex_mode, data=("uff/uff55_sample_test_record10.uff",)),
+        ValidationCase(
             "signal.psd_vs_scipy_welch", "signal",
             "Welch PSD of a 60 s random test, 1024-sample Hann segments: max |mvtk - scipy| "
             "relative to the peak",
@@ -565,6 +617,19 @@ def validation_cases() -> tuple[ValidationCase, ...]:
             f"{_LEISSA}, Table 4.50 (Ritz values)",
             ("mode 1", "mode 2", "mode 3", "mode 4", "mode 5"),
             (3.492, 8.525, 21.43, 27.33, 31.11), 1e-2, _leissa_cfff),
+        ValidationCase(
+            "fe.leissa_ffff_plate", "fe",
+            "MITC4, free square steel plate, 20 x 20, nu = 0.3: frequency parameters of the "
+            "first three elastic modes (after six rigid-body modes)",
+            f"{_LEISSA}, free square plate, nu = 0.3", ("mode 7", "mode 8", "mode 9"),
+            (13.468, 19.596, 24.270), 1e-2, _leissa_ffff),
+        ValidationCase(
+            "fe.smits_bimorph", "fe",
+            "series PIC 151 bimorph 30 x 5 x 0.5 mm, 10 V, 8 beam elements with the piezo "
+            "moment pairs: free-tip deflection",
+            "closed form: delta = 3/2 d31 V L^2 / h^2 (J. G. Smits, S. I. Dalke, T. K. "
+            "Cooney, Sensors and Actuators A 28 (1991) 41-61)", ("tip deflection (m)",),
+            (1.5 * 210e-12 * 10.0 * 0.03**2 / (0.5e-3) ** 2,), 1e-9, _smits_bimorph, "m"),
         ValidationCase(
             "fe.reddy_cross_ply", "fe",
             "MITC4, simply supported 0/90/90/0 plate, a/h = 10, E1/E2 = 40, 20 x 20: "
