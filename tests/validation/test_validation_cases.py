@@ -70,6 +70,13 @@ def test_a_wrong_value_fails_and_an_exception_is_an_error():
     assert df["passed"].isna().all()
     assert df["status"].iloc[0] == "error: RuntimeError: solver diverged"
 
+    def no_extra():
+        raise MissingDependencyError("reading TDMS needs npTDMS: pip install 'mvtk[tdms]'")
+
+    df = run_validation([_case(no_extra)])
+    assert df["passed"].isna().all()
+    assert df["status"].iloc[0] == "skipped: reading TDMS needs npTDMS: pip install 'mvtk[tdms]'"
+
 
 def test_bad_case_definitions():
     with pytest.raises(ParameterError, match=r"'x.case': 2 labels but 1 reference"):
