@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 __all__ = ["add_parser"]
 
@@ -15,6 +16,9 @@ def _init(args: argparse.Namespace) -> int:
     print(f"wrote {res.study}")
     if args.structure is None:
         print(f"wrote {res.structure} (a placeholder plate: edit it to your structure)")
+    elif res.structure.resolve() != Path(args.structure).resolve():
+        print(f"wrote {res.structure} around {args.structure}: edit what it marks EDIT, then "
+              f"check it with `mvtk modes {res.structure} -n 6`")
     for t in res.tests:
         what = t["kind"] if t["kind"] != "skipped" else f"skipped: {t['why']}"
         print(f"  {t['file']}: {what}")
@@ -31,7 +35,10 @@ def add_parser(subparsers) -> None:
         "record lengths and resonances found, plus DIR/structure.toml (a placeholder) when "
         "no --structure is given. The study is validated before the command returns.")
     p.add_argument("folder", help="folder to write study.toml (and structure.toml) into")
-    p.add_argument("--structure", default=None, help="your structure TOML (referenced)")
+    p.add_argument("--structure", default=None, metavar="FILE",
+                   help="your structure TOML (referenced), or a mesh file (Gmsh .msh, Abaqus "
+                   ".inp, VTK, ..., or a Nastran .bdf): DIR/structure.toml is then written "
+                   "around it, its element sets listed as section and support candidates")
     p.add_argument("--measurements", nargs="*", default=[], metavar="FILE",
                    help="measurement files (any format of mvtk read)")
     p.add_argument("--name", default=None, help="study name (default: the folder name)")

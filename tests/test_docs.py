@@ -94,3 +94,45 @@ def test_study_reference_is_generated_from_the_schema(monkeypatch):
     monkeypatch.setattr(schema_mod, "SCHEMA", changed)
     assert '`"SENTINEL-42"`' in mvtk_docs.study_schema_page()
     assert '`"SENTINEL-42"`' not in page
+
+
+def _fast_registry(fail: str | None = None):
+    """The registry with each case's computation replaced by its reference values (or
+    twice them for ``fail``): the page logic without the seconds of the real run."""
+    import dataclasses
+
+    from mvtk.validation import validation_cases
+
+    def const(values):
+        return lambda *_: values
+
+    return [dataclasses.replace(c, compute=const(
+        [2 * r if c.name == fail else r for r in c.reference])) for c in validation_cases()]
+
+
+def test_validation_page_lists_every_registry_case(tmp_path):
+    from mvtk.validation import run_validation, validation_cases
+
+    cases = _fast_registry()
+    table = run_validation(cases, data_dir=tmp_path)  # empty corpus: file cases not run
+    page = mvtk_docs.validation_page(table, seconds=1.0)
+    for case in validation_cases():
+        assert f"### `{case.name}`" in page, case.name
+        assert f"[`{case.name}`](#" in page, case.name  # in the summary table
+        assert " ".join(case.source.split()) in page, case.name  # in its section
+    n_data = sum(bool(c.data) for c in cases)
+    assert f"{len(cases)} cases, {len(cases) - n_data} pass, 0 fail, {n_data} not run" in page
+    assert "**FAIL**" not in page
+    assert mvtk_docs.failing_cases(table) == []  # not run is not a failure
+
+
+def test_validation_page_shows_a_failing_case():
+    from mvtk.validation import run_validation
+
+    cases = [c for c in _fast_registry(fail="fe.nafems_fv2") if not c.data]
+    page = mvtk_docs.validation_page(run_validation(cases))
+    line = next(x for x in page.splitlines() if x.startswith("| [`fe.nafems_fv2`]"))
+    assert line.endswith("| **FAIL** |") and "| 100 % |" in line
+    assert "1 fail" in page
+    table = run_validation(cases)
+    assert mvtk_docs.failing_cases(table) == ["fe.nafems_fv2"]

@@ -7,7 +7,12 @@ On every build this writes ``docs/_generated/``:
   ``tests/test_docs.py`` checks that every name is covered);
 - ``cli.md``: the ``--help`` text of ``mvtk`` and of every sub-command, from argparse;
 - ``study_schema.md``: the study TOML reference, from the schema the study parser
-  validates against (when the study package exposes one).
+  validates against (when the study package exposes one);
+- ``validation.md``: the validation evidence, from running the registry of validation
+  cases (:func:`mvtk.validation.run_validation`, the same cases ``tests/validation``
+  asserts): per case its source, reference and current values, error, tolerance and
+  verdict. A failing case is a Sphinx warning (an error under ``-W``); a case whose
+  measurement file is absent is shown as skipped.
 """
 
 from __future__ import annotations
@@ -161,6 +166,129 @@ def study_schema_page() -> str | None:
     return "\n".join(out) + "\n"
 
 
+def _cell(text) -> str:
+    return " ".join(str(text).split()).replace("|", "\\|")
+
+
+def _verdict(status: str) -> str:
+    """Verdict of one row (the reason a case did not run is given once, above its table)."""
+    if status == "pass":
+        return "pass"
+    if status == "FAIL":
+        return "**FAIL**"
+    return "not run" if status.startswith("skipped") else "**error**"
+
+
+def _case_verdict(rows) -> str:
+    statuses = set(rows["status"])
+    if statuses == {"pass"}:
+        return "pass"
+    if "FAIL" in statuses:
+        return "**FAIL**"
+    return _cell(next(iter(statuses)).split(":")[0])
+
+
+def _truth_kind(source: str) -> str:
+    """Short kind of the external truth, for the summary table."""
+    low = source.lower()
+    for prefix, kind in (("shared/data", "real file"), ("peer", "peer library"),
+                         ("closed form", "closed form"), ("exact", "exact property")):
+        if low.startswith(prefix):
+            return kind
+    return "published benchmark"
+
+
+def _worst_error(rows) -> str:
+    from mvtk.report import format_number
+
+    if rows["value"].isna().all():
+        return "—"
+    pct = rows["error_pct"].abs()
+    if pct.notna().all():
+        return f"{format_number(float(pct.max()), 2, floor=1e-10)} %"
+    err = rows["error"].abs().max()
+    unit = rows["unit"].iloc[0]
+    return f"{format_number(float(err), 2)} {unit}".rstrip()
+
+
+def validation_page(table=None, *, seconds: float | None = None) -> str:
+    """MyST text of the validation evidence page.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame, optional
+        The output of :func:`mvtk.validation.run_validation`; default: run the registry now.
+    seconds : float, optional
+        Wall time of the run, printed on the page.
+    """
+    import time
+
+    import mvtk
+    from mvtk.report import format_number
+    from mvtk.validation import run_validation
+
+    if table is None:
+        t0 = time.perf_counter()
+        table = run_validation()
+        seconds = time.perf_counter() - t0
+    cases = list(dict.fromkeys(table["case"]))
+    status = table.groupby("case", sort=False)["status"].agg(lambda s: _case_verdict(
+        table.loc[s.index]))
+    n_pass = int((status == "pass").sum())
+    n_fail = int((status == "**FAIL**").sum())
+    n_skip = len(cases) - n_pass - n_fail
+    took = f" in {seconds:.1f} s" if seconds is not None else ""
+    out = [
+        "# Validation evidence", "",
+        "Every number mvtk prints is tested against an external truth: a closed form, a "
+        "published benchmark, a peer library on the same data, or a real file from someone "
+        "else's instrument (`../shared/data`, see its `PROVENANCE.md`). This page is "
+        "**generated when the documentation is built**: it runs the registry of validation "
+        "cases (`mvtk.validation.validation_cases()`, the cases `tests/validation` asserts) "
+        "with the code it documents, so the values below are the current ones, not copied "
+        "from a past run. Run it yourself with `mvtk.validation.run_validation()`.", "",
+        f"mvtk {mvtk.__version__}: **{len(cases)} cases, {n_pass} pass, {n_fail} fail, "
+        f"{n_skip} not run**{took}. A case is not run when the external measurement corpus "
+        "is absent (a fresh clone without `../shared/data`; set `$MVTK_SHARED_DATA`).", "",
+        "The whole suite (`make test`) checks much more than this page: patch tests, "
+        "convergence rates, hypothesis sweeps, bad-input messages; the registry keeps the "
+        "benchmarks that are quick enough to rerun on every documentation build.", "",
+        "## Summary", "",
+        "| case | area | truth | worst error | tolerance | verdict |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for name in cases:
+        rows = table[table["case"] == name]
+        first = rows.iloc[0]
+        out.append(f"| [`{name}`](#{name.replace('.', '-').replace('_', '-')}) | "
+                   f"{first['area']} | {_truth_kind(first['source'])} | {_worst_error(rows)} | "
+                   f"{_cell(first['tolerance'])} | {status[name]} |")
+    out.append("")
+    for area in dict.fromkeys(table["area"]):
+        out += [f"## {area}", ""]
+        for name in [c for c in cases if table.loc[table["case"] == c, "area"].iloc[0] == area]:
+            rows = table[table["case"] == name]
+            first = rows.iloc[0]
+            out += [f"({name.replace('.', '-').replace('_', '-')})=",
+                    f"### `{name}`", "", _cell(first["title"]) + ".", "",
+                    f"**Source:** {_cell(first['source'])}.", "",
+                    f"**Verdict:** {status[name]}"
+                    + (f" ({_cell(first['status'].split(': ', 1)[1])})" if first["status"] not in
+                       ("pass", "FAIL") else f" (run time {first['seconds']:.2f} s)") + ".", "",
+                    "| quantity | reference | mvtk | error | error % | tolerance | verdict |",
+                    "| --- | --- | --- | --- | --- | --- | --- |"]
+            for _, r in rows.iterrows():
+                unit = f" {r['unit']}" if r["unit"] else ""
+                out.append(
+                    f"| {_cell(r['quantity'])} | {format_number(r['reference'], 8)}{unit} | "
+                    f"{format_number(r['value'], 8)}{unit} | "
+                    f"{format_number(r['error'], 2)} | "
+                    f"{format_number(r['error_pct'], 2, floor=1e-10)} | "
+                    f"{_cell(r['tolerance'])} | {_verdict(r['status'])} |")
+            out.append("")
+    return "\n".join(out) + "\n"
+
+
 def _write(path: Path, text: str) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     if not path.is_file() or path.read_text(encoding="utf-8") != text:
@@ -186,8 +314,29 @@ def generate(srcdir: Path) -> list[str]:
     return done
 
 
+def failing_cases(table) -> list[str]:
+    """Cases of a :func:`mvtk.validation.run_validation` table that failed or raised
+    (a case not run for want of its measurement file is not a failure)."""
+    bad = table["status"].eq("FAIL") | table["status"].str.startswith("error")
+    return list(dict.fromkeys(table.loc[bad, "case"]))
+
+
 def _on_builder_inited(app) -> None:
+    import time
+
+    from sphinx.util import logging
+
+    from mvtk.validation import run_validation
+
     generate(Path(app.srcdir))
+    t0 = time.perf_counter()
+    table = run_validation()
+    page = validation_page(table, seconds=time.perf_counter() - t0)
+    _write(Path(app.srcdir) / "_generated" / "validation.md", page)
+    log = logging.getLogger(__name__)
+    for name in failing_cases(table):  # an error under -W: the docs never show a silent FAIL
+        status = table.loc[table["case"] == name, "status"]
+        log.warning("validation case %s: %s", name, "; ".join(dict.fromkeys(status)))
 
 
 def setup(app):

@@ -6,6 +6,12 @@ comes from the files (channel names, record length, the resonances the default d
 estimator finds) or is a stated placeholder to edit. The written file is validated with
 :func:`mvtk.study.load_study` before the command reports success, so what ``init``
 writes is always accepted by ``mvtk run``.
+
+``--structure`` takes a structure TOML (referenced as it is) or a bare mesh file (Gmsh
+``.msh``, Abaqus ``.inp``, VTK, ... through meshio; a Nastran deck ``.bdf``/``.dat``/``.nas``):
+for a mesh, :func:`mesh_structure_toml` writes ``structure.toml`` around it with one shell
+section per element set (physical group) of surface cells and every other set listed as a
+commented candidate for a beam section or a support.
 """
 
 from __future__ import annotations
@@ -18,7 +24,10 @@ import numpy as np
 
 from ..errors import ConfigError, MvtkError
 
-__all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE"]
+__all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE", "mesh_structure_toml"]
+
+#: Suffixes of Nastran bulk-data decks (the whole model, sections included, in the file).
+_NASTRAN = (".bdf", ".dat", ".nas")
 
 #: Structure file written when the user gives none: a clamped steel plate to edit.
 STRUCTURE_TEMPLATE = '''\
@@ -143,7 +152,9 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     folder : path
         Output folder (created); existing files are refused unless ``overwrite``.
     structure : path, optional
-        The user's structure TOML (referenced, not copied). Default: a commented
+        The user's structure TOML (referenced, not copied), or a mesh file (any format
+        :func:`mvtk.fe.read_mesh` reads, or a Nastran deck): then ``folder/structure.toml``
+        is written around it by :func:`mesh_structure_toml`. Default: a commented
         placeholder plate written to ``folder/structure.toml``.
     measurements : sequence of path
         Measurement files: the first impact test becomes ``[measurements.impact]`` (its
@@ -171,7 +182,8 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         raise ConfigError(f"mvtk init: {str(folder)!r} is a file, expected a folder")
     folder.mkdir(parents=True, exist_ok=True)
     study_path = folder / "study.toml"
-    targets = [study_path] + ([] if structure is not None else [folder / "structure.toml"])
+    is_toml = structure is not None and Path(structure).suffix.lower() == ".toml"
+    targets = [study_path] + ([] if is_toml else [folder / "structure.toml"])
     for t in targets:
         if t.exists() and not overwrite:
             raise ConfigError(f"mvtk init: {str(t)!r} exists; use --force to overwrite it")
@@ -182,6 +194,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         s_path = Path(structure)
         if not s_path.is_file():
             raise ConfigError(f"mvtk init: structure file {str(s_path)!r} not found")
+        if not is_toml:
+            text = mesh_structure_toml(s_path, folder)
+            s_path = folder / "structure.toml"
+            s_path.write_text(text, encoding="utf-8")
     else:
         s_path = folder / "structure.toml"
         s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
@@ -204,7 +220,8 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "",
         "[structure]",
         f'file = "{_rel(s_path, folder)}"'
-        + ("   # EDIT: a placeholder plate" if structure is None else ""),
+        + ("   # EDIT: a placeholder plate" if structure is None else
+           "   # EDIT: written around your mesh" if not is_toml else ""),
         "",
         "[fe]",
         "n_modes = 6",
@@ -236,13 +253,24 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"fn_hz = {_fmt_list(fn)}   # resonances the default half-power estimator "
             "found reliable",
             "",
+        ]
+        material = _first_material(s_path)
+        updating = [
             "[updating]",
             f"targets_hz = {_fmt_list(fn)}   # EDIT: keep the modes the model should match",
             "",
             "[[updating.parameters]]   # EDIT: the uncertain parameters of your model",
-            f'path = "materials.{_first_material(s_path)}.E"',
-            "",
+            f'path = "materials.{material[0] if material else "steel"}.E"',
         ]
+        if material:
+            e = material[1]
+            updating += [f"lower = {0.5 * e:.6g}   # EDIT: bounds (half and twice the "
+                         "structure's value)", f"upper = {2.0 * e:.6g}"]
+            lines += updating + [""]
+        else:  # a Nastran deck: its materials are cards, not structure-TOML paths
+            lines += ["# The structure has no [materials] table (a Nastran deck): give the",
+                      "# updating parameters as paths into a structure TOML, or a builder.",
+                      *(f"# {x}" for x in updating), ""]
     if modal:
         lines += [
             "[modal]                 # multi-point FRF set (mvtk.modal)",
@@ -264,11 +292,164 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
                       f"mvtk run {study_path.as_posix()} --out {out_dir.as_posix()}")
 
 
-def _first_material(structure: Path) -> str:
+def _first_material(structure: Path) -> tuple[str, float] | None:
+    """Name and Young's modulus (Pa) of the structure's first material (None: none)."""
     from ..fe import load_structure
 
     try:
         mats = load_structure(structure).get("materials") or {}
     except MvtkError:
-        return "steel"
-    return next(iter(mats), "steel")
+        return None
+    for name, m in mats.items():
+        e = m.get("E", m.get("E1")) if isinstance(m, dict) else None
+        if isinstance(e, int | float) and e > 0:
+            return str(name), float(e)
+    return None
+
+
+def _toml_key(name: str) -> str:
+    """A TOML key: bare when it can be, else quoted."""
+    import re
+
+    if re.fullmatch(r"[A-Za-z0-9_-]+", name):
+        return name
+    return '"' + name.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _section_name(set_name: str, taken: set) -> str:
+    import re
+
+    base = re.sub(r"[^A-Za-z0-9_]+", "_", set_name).strip("_") or "section"
+    name, k = base, 2
+    while name in taken:
+        name, k = f"{base}_{k}", k + 1
+    taken.add(name)
+    return name
+
+
+def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
+    """Text of a structure TOML around a mesh file, written into ``folder``.
+
+    Every element set (Gmsh physical group, Abaqus ``*ELSET``, ...) holding only surface
+    cells (``tri3``/``quad4``) gets its own shell section (a placeholder 1 mm steel layer
+    marked EDIT); sets with line cells are listed, commented, as candidates for a beam
+    section (with a template ``[sections.*]`` table) or for a support, and every node
+    set as a candidate for ``boundary.supports``. Without a chosen support the model is
+    free-free (the file says so). A Nastran deck carries its own sections: the TOML then
+    only references it.
+
+    Parameters
+    ----------
+    mesh : path
+        The mesh file (referenced relative to ``folder``, not copied).
+    folder : path
+        Where the structure TOML will be written (for the relative path).
+
+    Returns
+    -------
+    str
+
+    Raises
+    ------
+    ConfigError
+        The mesh cannot be read, or has no element set of surface cells to give a section
+        to (the message lists the sets found).
+    """
+    from ..fe import read_mesh
+
+    mesh, folder = Path(mesh), Path(folder)
+    rel = _rel(mesh, folder)
+    if mesh.suffix.lower() in _NASTRAN:
+        return "\n".join([
+            f"# Structure written by `mvtk init` around the Nastran deck {mesh.name}: nodes,",
+            "# elements, properties, materials and SPCs all come from the deck. Check it with",
+            "# `mvtk modes structure.toml -n 6`.",
+            f'name = "{mesh.stem} (Nastran deck)"',
+            "",
+            "[structure]",
+            'type = "mesh"',
+            "",
+            "[mesh]",
+            f'file = "{rel}"',
+            "# spc_id = 1             # EDIT: the SPC set to apply (default: all SPCs)",
+            ""])
+    try:
+        m = read_mesh(mesh)
+    except MvtkError as err:
+        raise ConfigError(f"mvtk init: --structure {str(mesh)!r} is neither a structure TOML "
+                          f"nor a readable mesh: {err}") from err
+    except SystemExit as err:  # meshio ends the process (sys.exit) on some unreadable files
+        raise ConfigError(f"mvtk init: --structure {str(mesh)!r} is neither a structure TOML "
+                          "nor a readable mesh: meshio could not read it") from err
+    kinds = {n: set(k) for n, k in m.element_sets.items()}
+    shells = [n for n, k in kinds.items() if k and k <= {"tri3", "quad4"}]
+    lines_ = [n for n, k in kinds.items() if "line2" in k and not k & {"tri3", "quad4"}]
+    mixed = [n for n, k in kinds.items() if "line2" in k and k & {"tri3", "quad4"}]
+    if not shells:
+        found = ", ".join(f"{n} ({'/'.join(sorted(k))})" for n, k in kinds.items()) or "none"
+        raise ConfigError(
+            f"mvtk init: mesh {str(mesh)!r} has no element set (physical group) of only "
+            f"triangle/quad cells to give a shell section to; sets found: {found}. Add a "
+            "physical surface in Gmsh (or an *ELSET) for the shell, or write the structure "
+            "TOML by hand (docs: 'Structure TOML')")
+    counts = ", ".join(f"{len(c)} {k}" for k, c in m.cells.items())
+    lo, hi = m.nodes.min(axis=0), m.nodes.max(axis=0)
+    box = ", ".join(f"{a} {lo[i]:.4g}..{hi[i]:.4g}" for i, a in enumerate("xyz"))
+    taken: set = set()
+    shell_sec = {n: _section_name(n, taken) for n in shells}
+    beam_sec = {n: _section_name(n + "_beam", taken) for n in lines_}
+
+    def size(n: str) -> str:
+        return ", ".join(f"{len(v)} {k}" for k, v in m.element_sets[n].items())
+
+    out = [
+        f"# Structure written by `mvtk init` around the mesh {mesh.name} (read with meshio):",
+        f"# {len(m.nodes)} nodes, {counts};",
+        f"# bounding box {box} (file units, taken as m).",
+        "# EDIT the material, the section of each element set and the supports (SI units),",
+        "# then check it with `mvtk modes structure.toml -n 6`. Reference: docs, 'Structure",
+        "# TOML'.",
+        f'name = "{mesh.stem} (imported mesh)"',
+        "",
+        "[materials.steel]        # EDIT: your material",
+        "E = 210e9",
+        "nu = 0.30",
+        "rho = 7850",
+        "",
+        "[structure]",
+        'type = "mesh"',
+        "",
+        "[mesh]",
+        f'file = "{rel}"',
+        "# element set (physical group) -> section; sets not listed are left out of the model",
+        "sections = { " + ", ".join(f'{_toml_key(n)} = "{shell_sec[n]}"' for n in shells)
+        + " }",
+    ]
+    if lines_:
+        out.append("# candidates with line cells (a beam section, or only an edge to support):")
+        out += [f"#   {_toml_key(n)} = \"{beam_sec[n]}\"   ({size(n)})" for n in lines_]
+    if mixed:
+        out.append("# sets mixing surface and line cells (split them in the mesher to use them): "
+                   + ", ".join(f"{n} ({size(n)})" for n in mixed))
+    out.append("")
+    for n in shells:
+        out += [f"[sections.{shell_sec[n]}]   # element set {n!r}: {size(n)}",
+                "layers = [{ material = \"steel\", thickness = 1.0e-3 }]   # EDIT", ""]
+    for n in lines_:
+        out += [f"# [sections.{beam_sec[n]}]   # element set {n!r} as beams: {size(n)}",
+                '# shape = "rectangle"',
+                '# material = "steel"',
+                "# width = 0.01            # m, along the orientation vector",
+                "# height = 0.01           # m",
+                "# orientation = [0, 0, 1] # EDIT: a direction not along the beam",
+                ""]
+    node_sets = sorted(m.node_sets)
+    out += [
+        "[boundary]",
+        "# No support chosen: the model is FREE-FREE (six rigid-body modes). Candidates (node",
+        f"# sets of the mesh): {', '.join(node_sets) if node_sets else 'none'}.",
+        "# Types: clamped, pinned, simply_supported, symmetry_z, ... or a list of DOFs.",
+    ]
+    out += [f'# supports = {{ {_toml_key(n)} = "clamped" }}' for n in node_sets[:1]]
+    out.append("")
+    return "\n".join(out)

@@ -78,3 +78,127 @@ def test_mvtk_run_accepts_what_init_wrote(tmp_path):
     out = run(res.study, tmp_path / "mine" / "report", progress=False)
     assert not out.failed, out.failed
     assert out.report_path is not None and out.report_path.is_file()
+
+
+# ------------------------------------------------------------ imported meshes (issue 18)
+PANEL = ROOT / "data" / "structures" / "curved_panel"
+IMPACT = [DATA / "SYNTHETIC_smart_beam_impact.csv"]
+
+
+def test_init_around_a_bare_mesh_lists_the_physical_groups(tmp_path, capsys):
+    assert main(["init", str(tmp_path / "m"), "--structure", str(PANEL / "curved_panel.msh")]
+                ) == 0
+    out = capsys.readouterr().out
+    assert f"wrote {tmp_path / 'm' / 'structure.toml'} around " in out
+    assert "then check it with `mvtk modes" in out
+    from types import SimpleNamespace
+
+    res = SimpleNamespace(structure=tmp_path / "m" / "structure.toml",
+                          study=tmp_path / "m" / "study.toml")
+    text = res.structure.read_text(encoding="utf-8")
+    # the surface group gets a shell section, the line groups are commented candidates
+    assert 'sections = { skin = "skin" }' in text
+    assert '#   stiffener = "stiffener_beam"   (20 line2)' in text
+    assert '#   ends = "ends_beam"   (32 line2)' in text
+    assert "# [sections.stiffener_beam]" in text and "[sections.skin]" in text
+    assert "FREE-FREE" in text and "node\n# sets of the mesh): ends, skin, stiffener." in text
+    assert '# supports = { ends = "clamped" }' in text
+    assert "357 nodes, 320 quad4, 52 line2" in text
+    from mvtk.fe import load_structure
+
+    desc = load_structure(res.structure)
+    assert desc["mesh"]["sections"] == {"skin": "skin"}
+    study = load_study(res.study)
+    assert study.structure_file == res.structure.resolve()
+    assert "EDIT: written around your mesh" in res.study.read_text(encoding="utf-8")
+
+
+def test_init_mesh_errors_name_the_file_and_what_was_found(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    import numpy as np
+
+    lines = tmp_path / "rods.vtu"
+    meshio.Mesh(np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0.0]]),
+                [("line", np.array([[0, 1], [1, 2]]))],
+                cell_data={"ref": [np.array([7, 7])]}).write(lines)
+    with pytest.raises(ConfigError, match=r"rods.vtu' has no element set \(physical group\) of "
+                       r"only triangle/quad cells .* sets found: ref:7 \(line2\)"):
+        init_study(tmp_path / "a", structure=lines)
+    junk = tmp_path / "part.msh"
+    junk.write_text("this is not a mesh\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"--structure '.*part.msh' is neither a structure "
+                       "TOML nor a readable mesh"):
+        init_study(tmp_path / "b", structure=junk)
+    # the written structure.toml is refused like any other file to overwrite
+    init_study(tmp_path / "c", structure=PANEL / "curved_panel.msh")
+    (tmp_path / "c" / "study.toml").unlink()
+    with pytest.raises(ConfigError, match="structure.toml' exists; use --force"):
+        init_study(tmp_path / "c", structure=PANEL / "curved_panel.msh")
+
+
+def test_init_around_a_nastran_deck_references_it(tmp_path):
+    from mvtk.study._init import mesh_structure_toml
+
+    deck = tmp_path / "wing.bdf"
+    deck.write_text("BEGIN BULK\nENDDATA\n", encoding="utf-8")
+    text = mesh_structure_toml(deck, tmp_path / "s")
+    assert 'type = "mesh"' in text and 'file = "../wing.bdf"' in text
+    assert "sections" not in text.split("[mesh]")[1]  # the deck carries its properties
+
+
+def _run_ok(study_path, out):
+    from mvtk.study import run
+
+    res = run(study_path, out, progress=False)
+    assert not res.failed, res.failed
+    assert res.report_path is not None and res.report_path.is_file()
+    return res
+
+
+@pytest.mark.slow
+def test_mvtk_run_accepts_init_on_the_imported_panel(tmp_path):
+    """The curved panel (Gmsh mesh referenced by its structure TOML) with a free decay:
+    init writes a study that runs (FE modes of the imported mesh, decay damping)."""
+    res = init_study(tmp_path / "p", structure=PANEL / "curved_panel.toml",
+                     measurements=[DATA / "SYNTHETIC_smart_beam_decay.csv"])
+    assert res.structure == PANEL / "curved_panel.toml"  # referenced, not rewritten
+    out = _run_ok(res.study, tmp_path / "p" / "report")
+    assert "fe" in out.results
+
+
+@pytest.mark.slow
+def test_mvtk_run_accepts_init_on_a_bare_mesh_once_supported(tmp_path):
+    """`mvtk init --structure part.msh` with a hammer test: choosing a support among the
+    listed candidates (the EDIT a user makes) gives a study that runs, updating included.
+    The measurements are the smart beam's, not the panel's, so the report's frequency
+    checks fail (as they should); no stage fails."""
+    assert main(["init", str(tmp_path / "m"), "--structure", str(PANEL / "curved_panel.msh"),
+                 "--measurements", *map(str, IMPACT)]) == 0
+    s = tmp_path / "m" / "structure.toml"
+    text = s.read_text(encoding="utf-8")
+    s.write_text(text.replace('# supports = { ends = "clamped" }',
+                              'supports = { ends = "clamped" }'), encoding="utf-8")
+    study = (tmp_path / "m" / "study.toml").read_text(encoding="utf-8")
+    assert 'path = "materials.steel.E"' in study and "lower = 1.05e+11" in study
+    out = _run_ok(tmp_path / "m" / "study.toml", tmp_path / "m" / "report")
+    assert "updating" in out.results
+
+
+def test_init_mesh_lists_sets_mixing_surface_and_line_cells(tmp_path, monkeypatch):
+    import numpy as np
+
+    import mvtk.fe
+    from mvtk.fe import ImportedMesh
+    from mvtk.study._init import mesh_structure_toml
+
+    mesh = ImportedMesh(
+        np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0.0]]),
+        {"quad4": np.array([[0, 1, 2, 3]]), "line2": np.array([[1, 4]])},
+        {"plate": {"quad4": np.array([0])},
+         "both": {"quad4": np.array([0]), "line2": np.array([0])}},
+        {"plate": np.arange(4), "both": np.arange(5)})
+    monkeypatch.setattr(mvtk.fe, "read_mesh", lambda path: mesh)
+    text = mesh_structure_toml(tmp_path / "part.inp", tmp_path)
+    assert 'sections = { plate = "plate" }' in text
+    assert ("# sets mixing surface and line cells (split them in the mesher to use them): "
+            "both (1 quad4, 1 line2)") in text
