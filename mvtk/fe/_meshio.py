@@ -110,6 +110,10 @@ def read_mesh(path: str | Path) -> ImportedMesh:
     except Exception as err:  # meshio raises many types (ReadError, KeyError, ...)
         raise FormatError(f"mesh file {str(path)!r}: meshio could not read it "
                           f"({type(err).__name__}: {err})") from err
+    except SystemExit as err:  # meshio's Gmsh reader calls sys.exit on some bad files
+        detail = " ".join(captured.getvalue().split()) or f"exit status {err.code}"
+        raise FormatError(f"mesh file {str(path)!r}: meshio could not read it "
+                          f"({detail})") from None
     if captured.getvalue().strip():
         import warnings
 

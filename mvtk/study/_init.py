@@ -327,6 +327,14 @@ def _section_name(set_name: str, taken: set) -> str:
     return name
 
 
+#: Cell kinds listed surfaces first, whatever order the mesh file stores them in.
+_CELL_ORDER = {"quad4": 0, "tri3": 1, "line2": 2}
+
+
+def _cell_kinds(cells) -> list[str]:
+    return sorted(cells, key=lambda k: _CELL_ORDER.get(k, len(_CELL_ORDER)))
+
+
 def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
     """Text of a structure TOML around a mesh file, written into ``folder``.
 
@@ -378,9 +386,6 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
     except MvtkError as err:
         raise ConfigError(f"mvtk init: --structure {str(mesh)!r} is neither a structure TOML "
                           f"nor a readable mesh: {err}") from err
-    except SystemExit as err:  # meshio ends the process (sys.exit) on some unreadable files
-        raise ConfigError(f"mvtk init: --structure {str(mesh)!r} is neither a structure TOML "
-                          "nor a readable mesh: meshio could not read it") from err
     kinds = {n: set(k) for n, k in m.element_sets.items()}
     shells = [n for n, k in kinds.items() if k and k <= {"tri3", "quad4"}]
     lines_ = [n for n, k in kinds.items() if "line2" in k and not k & {"tri3", "quad4"}]
@@ -392,7 +397,7 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
             f"triangle/quad cells to give a shell section to; sets found: {found}. Add a "
             "physical surface in Gmsh (or an *ELSET) for the shell, or write the structure "
             "TOML by hand (docs: 'Structure TOML')")
-    counts = ", ".join(f"{len(c)} {k}" for k, c in m.cells.items())
+    counts = ", ".join(f"{len(m.cells[k])} {k}" for k in _cell_kinds(m.cells))
     lo, hi = m.nodes.min(axis=0), m.nodes.max(axis=0)
     box = ", ".join(f"{a} {lo[i]:.4g}..{hi[i]:.4g}" for i, a in enumerate("xyz"))
     taken: set = set()
@@ -400,7 +405,8 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
     beam_sec = {n: _section_name(n + "_beam", taken) for n in lines_}
 
     def size(n: str) -> str:
-        return ", ".join(f"{len(v)} {k}" for k, v in m.element_sets[n].items())
+        sets = m.element_sets[n]
+        return ", ".join(f"{len(sets[k])} {k}" for k in _cell_kinds(sets))
 
     out = [
         f"# Structure written by `mvtk init` around the mesh {mesh.name} (read with meshio):",

@@ -123,6 +123,11 @@ def test_curved_panel_mesh_is_regenerated_identically_from_its_geometry_file(tmp
 def test_bad_mesh_inputs(tmp_path):
     with pytest.raises(FormatError, match="not found"):
         read_mesh(tmp_path / "missing.msh")
+    # meshio's Gmsh reader ends the process (sys.exit) on a text file named .msh
+    junk = tmp_path / "junk.msh"
+    junk.write_text("this is not a mesh\n", encoding="utf-8")
+    with pytest.raises(FormatError, match=r"junk.msh': meshio could not read it \(.*gmsh"):
+        read_mesh(junk)
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.5, 0, 0], [0.5, 0.5, 0],
                     [0, 0.5, 0.0]])
     meshio.Mesh(pts, [("triangle6", np.array([[0, 1, 2, 3, 4, 5]]))]).write(
