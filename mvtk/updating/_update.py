@@ -139,6 +139,7 @@ class _Problem:
         self.one_sided: set[str] = set()
         self._cache: _State | None = None
         self._lowest: float | None = None
+        self.n_rigid = 0   # rigid-body modes of the model (free-free): solved, then dropped
         self._vectors = None  # last eigenvectors: warm start of the next eigen solve
 
     # -------------------------------------------------------------- helpers
@@ -199,13 +200,34 @@ class _Problem:
         v0 = self._vectors
         if v0 is not None and v0.shape[0] != model.n_dof:
             v0 = None
-        eig = eigsh_lowest(model.K, model.M, n, sigma=sigma, v0=v0)
+        while True:   # more than once only while the rigid-body modes are being counted
+            k = min(n + self.n_rigid, model.n_dof)
+            eig = self._elastic(eigsh_lowest(model.K, model.M, k, sigma=sigma, v0=v0))
+            if eig.omega2.size >= n or k == model.n_dof or k == n + self.n_rigid:
+                break
+        if eig.omega2.size < len(self.targets):
+            raise ParameterError(
+                f"the model has {self.n_rigid} rigid-body modes and only {eig.omega2.size} "
+                f"elastic modes among the {n} computed, fewer than the "
+                f"{len(self.targets)} targets: support it or raise n_modes")
         self._vectors = eig.vectors
         if eig.omega2[0] > 0:
             self._lowest = float(eig.omega2[0])
         self.timing["eigen_s"] += time.perf_counter() - t0
         self.timing["n_eigen"] += 1
         return eig
+
+    def _elastic(self, eig):
+        """``eig`` without its rigid-body modes: eigenvalues below 1e-4 x that of the
+        lowest target (f below 1 % of it), which no target can pair with and whose zero
+        frequency has no finite sensitivity. Their count is kept so that later solves ask
+        for ``n_modes`` elastic modes."""
+        rigid = eig.omega2 < 1e-4 * (TWO_PI * float(self.ft.min())) ** 2
+        if not rigid.any():
+            return eig
+        self.n_rigid = max(self.n_rigid, int(rigid.sum()))
+        keep = ~rigid
+        return replace(eig, omega2=eig.omega2[keep], vectors=eig.vectors[:, keep])
 
     # ------------------------------------------------------------ affine path
     def _affine_setup(self) -> None:
