@@ -601,19 +601,35 @@ def eigsh_lowest(
             M = M.copy()
             M.eliminate_zeros()
         start = _start_vector(ndof, v0, M)
-        try:
-            with _blas_limits():
-                w, v = spla.eigsh(
-                    K, k=n, M=M, sigma=sigma, which="LM", OPinv=opinv, tol=tol,
-                    ncv=min(ndof, max(2 * n + 1, 20)), v0=start,
-                )
-        except spla.ArpackNoConvergence as err:
+        k = n
+        for _attempt in range(3):
+            try:
+                with _blas_limits():
+                    w, v = spla.eigsh(
+                        K, k=k, M=M, sigma=sigma, which="LM", OPinv=opinv, tol=tol,
+                        ncv=min(ndof, max(2 * k + 1, 20)), v0=start,
+                    )
+            except spla.ArpackNoConvergence as err:
+                raise ConvergenceError(
+                    f"eigsh did not converge for {k} modes of a {ndof}-DOF model"
+                ) from err
+            order = np.argsort(w)
+            w, v = w[order], v[:, order]
+            missing = _missed_copies(K, M, w[:n])
+            n_fact += missing is not None
+            if not missing:
+                break
+            # single-vector Lanczos finds the copies of a repeated eigenvalue only through
+            # round-off: ask for more modes, from another start vector
+            k = min(ndof - 2, k + missing + 2)
+            start = _start_vector(ndof, None, M) + v[:, :n].sum(axis=1)
+        else:
             raise ConvergenceError(
-                f"eigsh did not converge for {n} modes of a {ndof}-DOF model"
-            ) from err
+                f"the lowest {n} modes of a {ndof}-DOF model: {missing} copies of a "
+                "repeated eigenvalue were still missing after 3 Lanczos runs (Sturm count "
+                "of K - tau M); request more modes")
+        w, v = w[:n], v[:, :n]
         n_solves = lu.n_solves
-        order = np.argsort(w)
-        w, v = w[order], v[:, order]
     # mass-normalise explicitly (eigsh returns M-orthonormal vectors already, up to
     # round-off; the dense path does too, but be explicit and fix a sign convention)
     mnorm = np.sqrt(np.einsum("ij,ij->j", v, M @ v))
@@ -635,6 +651,36 @@ def eigsh_lowest(
     v = v * np.sign(v[big, np.arange(v.shape[1])])
     return EigenSolution(omega2=w, vectors=v, n_factorizations=n_fact, n_solves=n_solves,
                          backend=used)
+
+
+def _clustered(w: np.ndarray) -> bool:
+    """True when two eigenvalues agree to 1e-6 (relative): a repeated eigenvalue."""
+    if w.size < 2:
+        return False
+    scale = np.maximum(np.abs(w[1:]), np.abs(w).max() * 1e-12)
+    return bool(np.any(np.diff(w) <= 1e-6 * scale))
+
+
+def _missed_copies(K, M, w: np.ndarray) -> int | None:
+    """Eigenvalues of ``(K, M)`` below the highest of ``w`` that Lanczos did not return.
+
+    Checked only when ``w`` holds a repeated eigenvalue (a symmetric structure, rigid
+    modes), the case in which single-vector Lanczos can return fewer copies than exist.
+    Sylvester's law of inertia: the number of negative pivots of the symmetric
+    factorisation of ``K - tau M`` (SuperLU, diagonal pivots in a symmetric ordering)
+    is the number of eigenvalues below ``tau``, taken just above ``max(w)``. Returns
+    None when not checked (no cluster, or ``K - tau M`` singular at ``tau``).
+    """
+    if not _clustered(w):
+        return None
+    top = float(w[-1])
+    tau = top + 1e-6 * max(abs(top), float(np.abs(w).max()), 1e-300)
+    try:
+        lu = factorize((K - tau * M).tocsc(), backend="superlu")
+    except ParameterError:
+        return None
+    below = int(np.count_nonzero(lu.U.diagonal() < 0))
+    return max(below - w.size, 0)
 
 
 @dataclass(frozen=True)
