@@ -8,6 +8,15 @@ import pytest
 from mvtk._interrupt import deferred_interrupt
 
 
+@pytest.fixture(autouse=True)
+def python_sigint_handler():
+    """These tests send SIGINT to the test process: make sure Python's handler, not the C
+    default (terminate), receives it, whatever a library loaded earlier installed."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 def _swallowing_reader():
     """What pyuff does: any failure, Ctrl-C included, becomes a generic Exception."""
     try:

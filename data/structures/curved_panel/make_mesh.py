@@ -17,7 +17,8 @@ def generate(out: Path, geo: Path = HERE / "curved_panel.geo") -> Path:
     """Mesh ``geo`` with Gmsh and write it to ``out`` as Gmsh 2.2 ASCII."""
     import gmsh
 
-    gmsh.initialize(readConfigFiles=False)  # no user gmshrc: the same mesh everywhere
+    # no user gmshrc (the same mesh everywhere); keep Python's Ctrl-C handling
+    gmsh.initialize(readConfigFiles=False, interruptible=False)
     try:
         gmsh.option.setNumber("General.Terminal", 0)
         gmsh.open(str(geo))
