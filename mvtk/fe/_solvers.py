@@ -662,25 +662,32 @@ def _clustered(w: np.ndarray) -> bool:
 
 
 def _missed_copies(K, M, w: np.ndarray) -> int | None:
-    """Eigenvalues of ``(K, M)`` below the highest of ``w`` that Lanczos did not return.
+    """Eigenvalues of ``(K, M)`` below the highest cluster of ``w`` that Lanczos missed.
 
     Checked only when ``w`` holds a repeated eigenvalue (a symmetric structure, rigid
     modes), the case in which single-vector Lanczos can return fewer copies than exist.
     Sylvester's law of inertia: the number of negative pivots of the symmetric
     factorisation of ``K - tau M`` (SuperLU, diagonal pivots in a symmetric ordering)
-    is the number of eigenvalues below ``tau``, taken just above ``max(w)``. Returns
-    None when not checked (no cluster, or ``K - tau M`` singular at ``tau``).
+    is the number of eigenvalues below ``tau``. ``tau`` is just below the highest
+    eigenvalue of ``w`` and its copies (copies beyond the ``n`` requested are not
+    missing). Returns None when not checked (no cluster, nothing below the top cluster,
+    or ``K - tau M`` singular).
     """
     if not _clustered(w):
         return None
-    top = float(w[-1])
-    tau = top + 1e-6 * max(abs(top), float(np.abs(w).max()), 1e-300)
+    scale = np.maximum(np.abs(w), np.abs(w).max() * 1e-12)
+    top = w.size - 1
+    while top > 0 and w[top] - w[top - 1] <= 1e-6 * scale[top]:
+        top -= 1
+    if top == 0:
+        return None
+    tau = float(w[top] - 1e-7 * scale[top])
     try:
         lu = factorize((K - tau * M).tocsc(), backend="superlu")
     except ParameterError:
         return None
     below = int(np.count_nonzero(lu.U.diagonal() < 0))
-    return max(below - w.size, 0)
+    return max(below - top, 0)
 
 
 @dataclass(frozen=True)

@@ -194,8 +194,10 @@ def test_sturm_count_of_missed_repeated_eigenvalues(plate):
     # a repeated eigenvalue with one copy "missed": K = diag(1, 2, 2, 2, 5), M = I
     K = sp.diags([1.0, 2.0, 2.0, 2.0, 5.0, 7.0, 9.0]).tocsc()
     M = sp.eye(7, format="csc")
-    assert S._missed_copies(K, M, np.array([1.0, 2.0, 2.0])) == 1
-    assert S._missed_copies(K, M, np.array([1.0, 2.0, 2.0, 2.0])) == 0
+    assert S._missed_copies(K, M, np.array([1.0, 2.0, 2.0, 5.0])) == 1
+    assert S._missed_copies(K, M, np.array([1.0, 2.0, 2.0, 2.0, 5.0])) == 0
+    # copies of the highest eigenvalue beyond the n requested are not missing
+    assert S._missed_copies(K, M, np.array([1.0, 2.0, 2.0])) == 0
     assert S._missed_copies(K, M, np.array([1.0, 2.0])) is None  # no cluster: not checked
     # eigsh_lowest returns all three copies
     np.testing.assert_allclose(fe.eigsh_lowest(K, M, 4).omega2, [1, 2, 2, 2], rtol=1e-12)
