@@ -287,7 +287,7 @@ def _smooth_trial_scale(model: FEModel) -> float:
     """
     node, comp = model.dof_node, model.dof_component
     xyz = model.nodes
-    best = np.inf
+    fields = []
     for a in range(3):
         if np.ptp(xyz[:, a]) == 0:
             continue
@@ -300,12 +300,15 @@ def _smooth_trial_scale(model: FEModel) -> float:
                 full[:, d] = s_a**2
                 axis = np.cross(np.eye(3)[a], np.eye(3)[d])
                 full[:, 3:] = 2 * s_a[:, None] * axis[None, :]
-                x = full[node, comp]
-                mm = float(x @ (model.M @ x))
-                kk = float(x @ (model.K @ x))
-                if mm > 0 and kk > 0:
-                    best = min(best, kk / mm)
-    return best
+                fields.append(full[node, comp])
+    if not fields:
+        return np.inf
+    # all trial fields in one pass over K and M (one sparse product per matrix)
+    X = np.column_stack(fields)
+    mm = np.einsum("ij,ij->j", X, model.M @ X)
+    kk = np.einsum("ij,ij->j", X, model.K @ X)
+    ok = (mm > 0) & (kk > 0)
+    return float(np.min(kk[ok] / mm[ok])) if np.any(ok) else np.inf
 
 
 def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
