@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib
 import math
 import os
 import sys
@@ -244,6 +245,11 @@ def run(
 #: ``ingest`` (only ``damping`` needs it) beside ``modal``, ``fe`` and ``updating``;
 #: ``uncertainty`` (only the report needs it) beside ``correlation`` to ``control``.
 _BACKGROUND = ("ingest", "uncertainty")
+#: Modules a worker stage imports that the main process needs later too (the modal
+#: stage reads with mvtk.io, the report plots with mvtk.scale): imported before the fork,
+#: so the import is paid once, not in the worker and again in the main process.
+_PRELOAD = {"ingest": ("mvtk.io", "mvtk.signal", "mvtk.damping"),
+            "uncertainty": ("mvtk.scale", "mvtk.updating")}
 
 
 class _ChildError(Exception):
@@ -377,6 +383,8 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         key, _ = key_of(name)
         if key is None or cache.peek(name, key, ReadTracker(study)):
             return
+        for module in _PRELOAD.get(name, ()):
+            importlib.import_module(module)
         background[name] = _Background(compute, study)
 
     def do(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
@@ -421,9 +429,15 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
             if name in selected:
                 bar.update(1)
 
+    from ..fe._solvers import _blas_limits
     from . import _ema
     from . import _stages as st
 
+    # one BLAS thread per process: the study's matrices are small (threads only add
+    # synchronisation), and the worker processes already use the second core; set
+    # before any worker is forked, so they inherit it
+    blas = _blas_limits()
+    blas.__enter__()
     try:
         # the measurement files are read in a worker process while the main one
         # identifies the multi-point test, solves the FE model and updates it; only the
@@ -477,6 +491,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
     finally:
         for bg in background.values():
             bg.abort()
+        blas.__exit__(None, None, None)
 
     timings = {s: timings[s] for s in STAGES if s in timings}
     report_path = None
