@@ -10,6 +10,11 @@ figure, because the machine is shared.
 
     python benchmarks/_summary.py [--out reports/bench.json] [--only fe,study] [--quick]
     python benchmarks/_summary.py --collect     # gather reports/bench/*.json only
+    python benchmarks/_summary.py --markdown    # print the latest summary as a table
+
+``--markdown`` runs nothing: it renders ``--out`` (default ``reports/bench.json``) as a
+markdown table (one row per benchmark: headline figures, peer, ratios, machine load),
+ready to paste into the README.
 
 ``--quick`` passes ``--quick`` to benchmarks that accept it (smaller problems).
 """
@@ -53,6 +58,64 @@ def _plain(x):
         return str(x)
 
 
+#: Figures shown in the markdown table per benchmark (others: the first scalar ones).
+HEADLINE = {
+    "fe": ("n_dof", "median_total_s", "median_eigsh_s", "limit_ratio",
+           "opensees_median_eigen_s", "fn_max_rel_diff_vs_opensees"),
+    "fe_million": ("n_dof", "total_s", "peak_rss_mib", "predicted_mib"),
+    "study": ("cold_s", "cold_cpu_s", "warm_s", "target_cold_s"),
+}
+_MAX_FIGURES = 4
+
+
+def _fmt(x) -> str:
+    """A number with 3 significant digits (thousands separated for integers)."""
+    if isinstance(x, bool) or not isinstance(x, int | float):
+        return str(x)
+    if isinstance(x, int) or float(x).is_integer() and abs(x) >= 1000:
+        return f"{int(x):,}"
+    if x != x:  # NaN
+        return "n/a"
+    return f"{x:.3g}"
+
+
+def _cell(text: str) -> str:
+    return str(text).replace("|", "\\|").replace("\n", " ")
+
+
+def markdown_table(summary: dict) -> str:
+    """Markdown table of a summary written by :func:`main` (one row per benchmark).
+
+    Columns: benchmark, headline figures (:data:`HEADLINE`, else the first scalar
+    figures; ``_s`` seconds, ``_mib`` MiB), the peer, the ratios (peer time / mvtk time:
+    > 1 means mvtk is faster, unless the name says otherwise) and the 1-minute load
+    average when it ran (the machine is shared). A benchmark that failed shows its
+    return code.
+    """
+    head = (f"Benchmarks of {summary.get('created_utc', '?')} (Python "
+            f"{summary.get('python', '?')}, {summary.get('cpu_count', '?')} cores; "
+            "`make bench`, reports/bench.json)")
+    rows = ["| benchmark | figures | peer | ratios | load |", "|---|---|---|---|---|"]
+    for name, b in summary.get("benchmarks", {}).items():
+        figs = b.get("figures") or {}
+        scalar = {k: v for k, v in figs.items()
+                  if isinstance(v, int | float) and not isinstance(v, bool)}
+        keys = [k for k in HEADLINE.get(name, ()) if k in scalar] \
+            or list(scalar)[:_MAX_FIGURES]
+        shown = ", ".join(f"{k} {_fmt(scalar[k])}" for k in keys)
+        if b.get("returncode"):
+            shown = f"FAILED (return code {b['returncode']}) " + shown
+        elif not figs:
+            tail = b.get("stdout_tail") or []
+            shown = tail[-1] if tail else ""
+        ratios = ", ".join(f"{k} {_fmt(v)}" for k, v in (b.get("ratios") or {}).items()
+                           if isinstance(v, int | float))
+        load = b.get("load_avg_1min_before", b.get("load_avg_1min"))
+        rows.append(f"| {_cell(name)} | {_cell(shown)} | {_cell(b.get('peer', ''))} | "
+                    f"{_cell(ratios)} | {_fmt(load) if load is not None else ''} |")
+    return head + "\n\n" + "\n".join(rows) + "\n"
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(ROOT / "reports" / "bench.json"))
@@ -61,8 +124,19 @@ def main() -> None:
     ap.add_argument("--collect", action="store_true",
                     help="run nothing: gather the per-benchmark JSON files already in "
                          "reports/bench/ (from runs with MVTK_BENCH_JSON set)")
+    ap.add_argument("--markdown", action="store_true",
+                    help="run nothing: print --out as a markdown table (for the README)")
     args = ap.parse_args()
     out = Path(args.out)
+    if args.markdown:
+        if not out.is_file():
+            sys.exit(f"{out} does not exist: run `make bench` (or this script) first")
+        try:
+            summary = json.loads(out.read_text())
+        except ValueError as err:
+            sys.exit(f"{out} is not a JSON summary: {err}")
+        sys.stdout.write(markdown_table(summary))
+        return
     parts = out.parent / "bench"
     parts.mkdir(parents=True, exist_ok=True)
     only = {s.strip() for s in args.only.split(",") if s.strip()}

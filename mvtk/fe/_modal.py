@@ -101,6 +101,8 @@ class ModalResult:
 #: Names of the strain-energy parts of :func:`energy_split`, in column order.
 ENERGY_PARTS: tuple[str, ...] = ("bending", "torsion", "in-plane", "axial")
 _CHUNK = 4096
+#: Up to this many distinct element shapes per chunk, energies are summed shape by shape.
+_SHARED_SHAPES = 32
 
 
 def _shell_groups(model: FEModel):
@@ -180,15 +182,14 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
         conn = model.elements[kind][idx]
         abd = lam.ABD
         zero2 = np.zeros((2, 2))
-        parts = []
         a_only = np.zeros((6, 6))
         a_only[:3, :3] = abd[:3, :3]
         d_n = np.zeros((6, 6))
         d_n[3:5, 3:5] = abd[3:5, 3:5]
         d_t = np.zeros((6, 6))
         d_t[5, 5] = abd[5, 5]
-        parts = [(d_n, zero2, 0.0), (d_t, zero2, 0.0), (np.zeros((6, 6)), lam.H, 0.0),
-                 (a_only, zero2, 1e-3 if drill is None else drill)]
+        parts = [(d_n, zero2), (d_t, zero2), (np.zeros((6, 6)), lam.H), (a_only, zero2)]
+        drill_df = 1e-3 if drill is None else drill
         for start in range(0, len(conn), _CHUNK):
             c = conn[start:start + _CHUNK]
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
@@ -197,21 +198,34 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
                 ax = ax[start:start + _CHUNK]
             xy, T = shell_local_geometry(model.nodes[c], ax)
             ue = np.einsum("eij,ejk->eik", T, u[dofs])  # element-frame DOFs
-            # identical element shapes share their matrices (structured meshes)
+            # identical element shapes share their matrices (structured meshes): the four
+            # parts of each distinct shape come from one element-matrix call
             scale = max(float(np.abs(xy).max()), 1e-300)
             key = np.round(xy.reshape(len(c), -1) / (1e-10 * scale)).astype(np.int64)
             _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
             inv = inv.ravel()
-            e = []
-            for abd_p, h_p, df in parts:
-                if c.shape[1] == 4:
-                    Ku, _ = mitc4_matrices(xy[first], abd_p[None], h_p[None],
-                                           np.zeros((1, 3)), df)
-                else:
-                    Ku, _ = mitc3_matrices(xy[first], abd_p[None], h_p[None],
-                                           np.zeros((1, 3)), np.full(len(first),
-                                                                     lam.thickness), df)
-                e.append(np.einsum("eik,eij,ejk->ek", ue, Ku[inv], ue, optimize=True))
+            n_u = len(first)
+            xy_u = np.tile(xy[first], (4, 1, 1))
+            abd_p = np.repeat(np.stack([p[0] for p in parts]), n_u, axis=0)
+            h_p = np.repeat(np.stack([p[1] for p in parts]), n_u, axis=0)
+            # the drilling penalty is drill_df x A66: nonzero in the membrane part only
+            if c.shape[1] == 4:
+                Ku, _ = mitc4_matrices(xy_u, abd_p, h_p, np.zeros((1, 3)), drill_df)
+            else:
+                Ku, _ = mitc3_matrices(xy_u, abd_p, h_p, np.zeros((1, 3)),
+                                       np.full(4 * n_u, lam.thickness), drill_df)
+            Ku = Ku.reshape(4, n_u, *Ku.shape[1:])
+            e = np.empty((4, len(c), k))
+            if n_u <= _SHARED_SHAPES:
+                for g in range(n_u):
+                    sel = np.flatnonzero(inv == g) if n_u > 1 else slice(None)
+                    # u' K u of every element of this shape and part: one matrix product
+                    ug = ue[sel].transpose(1, 0, 2).reshape(ue.shape[1], -1)
+                    e[:, sel] = np.einsum("pij,ij->pj", Ku[:, g] @ ug, ug).reshape(4, -1, k)
+            else:
+                for part in range(4):
+                    e[part] = np.einsum("eik,eij,ejk->ek", ue, Ku[part][inv], ue,
+                                        optimize=True)
             normal, twist, shear, membrane = e
             # transverse shear goes with the element's dominant curvature kind
             to_twist = twist > normal
@@ -273,7 +287,7 @@ def _smooth_trial_scale(model: FEModel) -> float:
     """
     node, comp = model.dof_node, model.dof_component
     xyz = model.nodes
-    best = np.inf
+    fields = []
     for a in range(3):
         if np.ptp(xyz[:, a]) == 0:
             continue
@@ -286,12 +300,15 @@ def _smooth_trial_scale(model: FEModel) -> float:
                 full[:, d] = s_a**2
                 axis = np.cross(np.eye(3)[a], np.eye(3)[d])
                 full[:, 3:] = 2 * s_a[:, None] * axis[None, :]
-                x = full[node, comp]
-                mm = float(x @ (model.M @ x))
-                kk = float(x @ (model.K @ x))
-                if mm > 0 and kk > 0:
-                    best = min(best, kk / mm)
-    return best
+                fields.append(full[node, comp])
+    if not fields:
+        return np.inf
+    # all trial fields in one pass over K and M (one sparse product per matrix)
+    X = np.column_stack(fields)
+    mm = np.einsum("ij,ij->j", X, model.M @ X)
+    kk = np.einsum("ij,ij->j", X, model.K @ X)
+    ok = (mm > 0) & (kk > 0)
+    return float(np.min(kk[ok] / mm[ok])) if np.any(ok) else np.inf
 
 
 def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:

@@ -305,15 +305,24 @@ def _figure_bytes(figure: Any, image_format: str) -> tuple[str, bytes]:
     import matplotlib
 
     out = {}
-    for fmt in (("png", "svg") if image_format == "auto" else (image_format,)):
-        buf = io.BytesIO()
-        if fmt == "png":
-            figure.savefig(buf, format="png", dpi=100)
-        else:
-            # text as <text> (not glyph paths): smaller, selectable, searchable in the PDF
-            with matplotlib.rc_context({"svg.fonttype": "none"}):
-                figure.savefig(buf, format="svg", metadata={"Date": None})
-        out[fmt] = buf.getvalue()
+    engine = figure.get_layout_engine()
+    try:
+        for fmt in (("png", "svg") if image_format == "auto" else (image_format,)):
+            buf = io.BytesIO()
+            if fmt == "png":
+                figure.savefig(buf, format="png", dpi=100)
+            else:
+                # text as <text> (not glyph paths): smaller, selectable, searchable
+                with matplotlib.rc_context({"svg.fonttype": "none"}):
+                    figure.savefig(buf, format="svg", metadata={"Date": None})
+            out[fmt] = buf.getvalue()
+            if engine is not None:
+                # the second format reuses the layout of the first (the layout engine
+                # is half of the render time); restored below
+                figure.set_layout_engine("none")
+    finally:
+        if engine is not None:
+            figure.set_layout_engine(engine)
     fmt = min(out, key=lambda k: len(out[k]))
     return ("image/png" if fmt == "png" else "image/svg+xml"), out[fmt]
 

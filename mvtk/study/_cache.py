@@ -354,6 +354,14 @@ class StageCache:
                 return None
         return result, ds, full
 
+    def peek(self, stage: str, key: str, tracker: ReadTracker | None = None) -> bool:
+        """True when :meth:`get` would load ``stage`` from the cache (no warnings here)."""
+        if not self.enabled:
+            return False
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return self._load(stage, key, tracker) is not None
+
     def get(self, stage: str, key: str, compute: Callable[[], tuple[dict, Any]],
             tracker: ReadTracker | None = None):
         """Return ``(result_dict, dataset_or_None)`` for ``stage`` with base ``key``.

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import importlib
+import math
 import os
 import sys
 import time
@@ -189,6 +191,7 @@ def run(
     stages=None,
     lock_timeout_s: float | None = None,
     on_wait: Callable[[str], None] | None = None,
+    parallel: bool = True,
 ) -> StudyResult:
     """Run the study in ``study_path`` and write its report to ``out_dir``.
 
@@ -214,6 +217,12 @@ def run(
         Wait at most this long for another run holding ``out_dir`` (default: no limit).
     on_wait : callable, optional
         Called with a message if the run has to wait for the lock.
+    parallel : bool
+        Compute the ``ingest`` stage (the measurement files; only ``damping`` needs
+        it) and the Monte-Carlo ``uncertainty`` stage (only the report needs it) in
+        forked worker processes while the main process runs the other stages, so a
+        two-core machine runs both at once. Results are identical; ignored where
+        ``fork`` is unavailable (Windows: every stage runs in process).
 
     Returns
     -------
@@ -230,10 +239,109 @@ def run(
     out = check_output_dir(out_dir)
     with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait):
         return _run_locked(study, out, use_cache=use_cache, progress=progress,
-                           report=report, stages=stages)
+                           report=report, stages=stages, parallel=parallel)
 
 
-def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages):
+#: Stages computed in a forked worker process while the main process runs other stages:
+#: ``ingest`` (only ``damping`` needs it) beside ``modal``, ``fe`` and ``updating``;
+#: ``uncertainty`` (only the report needs it) beside ``correlation`` to ``control``.
+_BACKGROUND = ("ingest", "uncertainty")
+#: Modules a worker stage imports that the main process needs later too (the modal
+#: stage reads with mvtk.io, the report plots with mvtk.scale): imported before the fork,
+#: so the import is paid once, not in the worker and again in the main process.
+_PRELOAD = {"ingest": ("mvtk.io", "mvtk.signal", "mvtk.damping"),
+            "uncertainty": ("mvtk.scale", "mvtk.updating")}
+
+
+class _ChildError(Exception):
+    """A stage that failed in the worker process, with the message the report shows."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message)
+        self.message = message
+
+
+def _child_main(conn, compute, study) -> None:
+    """Worker process: run ``compute`` on a fresh tracker and send its outcome."""
+    import pickle
+    import signal
+
+    from ._cache import to_jsonable
+
+    # Ctrl-C goes to the main process, which ends this one
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    tracker = ReadTracker(study)
+    t0, c0 = time.perf_counter(), time.process_time()
+    try:
+        res, ds = compute(TrackedStudy(study, tracker))
+        msg = ("ok", to_jsonable(res), ds, dict(tracker.reads),
+               time.perf_counter() - t0, time.process_time() - c0)
+    except BaseException as err:  # noqa: BLE001 - reported by the main process
+        if isinstance(err, MvtkError | ImportError):
+            try:
+                pickle.loads(pickle.dumps(err))
+                msg = ("raise", err)
+            except Exception:  # noqa: BLE001 - an exception that does not pickle
+                msg = ("error", str(err))
+        else:
+            tb = traceback.extract_tb(err.__traceback__)[-1]
+            msg = ("error", f"internal error {type(err).__name__}: {err} "
+                            f"(at {Path(tb.filename).name}:{tb.lineno}); please report it")
+    conn.send(msg)
+    conn.close()
+
+
+class _Background:
+    """One stage computed in a forked process; :meth:`result` is its ``compute``."""
+
+    def __init__(self, compute, study) -> None:
+        import multiprocessing as mp
+
+        ctx = mp.get_context("fork")
+        self._recv, send = ctx.Pipe(duplex=False)
+        self._proc = ctx.Process(target=_child_main, args=(send, compute, study),
+                                 daemon=True)
+        self._proc.start()
+        send.close()
+        self.wall_s = self.cpu_s = float("nan")
+
+    def result(self, s: TrackedStudy):
+        try:
+            msg = self._recv.recv()
+        except EOFError:
+            raise _ChildError(f"the worker process ended without a result (exit code "
+                              f"{self._proc.exitcode})") from None
+        finally:
+            self.close()
+        if msg[0] == "raise":
+            raise msg[1]
+        if msg[0] == "error":
+            raise _ChildError(msg[1])
+        _, res, ds, reads, self.wall_s, self.cpu_s = msg
+        s._tracker.reads.update(reads)
+        return res, ds
+
+    def close(self) -> None:
+        """Wait for the process to end (it ends after sending its result)."""
+        self._recv.close()
+        self._proc.join(timeout=5.0)
+        self.abort()
+
+    def abort(self) -> None:
+        """End the process now if it still runs (an interrupted or failed run)."""
+        if self._proc.is_alive():
+            self._proc.kill()
+        self._proc.join()
+
+
+def _can_fork() -> bool:
+    import multiprocessing as mp
+
+    return "fork" in mp.get_all_start_methods()
+
+
+def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
+                parallel=True):
     import mvtk
 
     cache = StageCache(out / "cache", enabled=use_cache)
@@ -255,6 +363,31 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
     bar = tqdm(total=len(selected) + int(report), desc="mvtk run", unit="stage",
                disable=not show, leave=False)
 
+    def key_of(name: str) -> tuple[str | None, str]:
+        """(cache key, "") of a stage that can run, else (None, why not)."""
+        if not _configured(cfg, name):
+            return None, "not configured in the study file"
+        needs = [n for n in STAGE_NEEDS[name]
+                 if _configured(cfg, n) or n in _HARD.get(name, ())]
+        missing = [n for n in needs if n not in results]
+        if missing:
+            return None, f"needs the stage(s) {missing}, which did not complete"
+        return stage_key(name, version, code_hash(*_CODE[name]),
+                         {n: cache.keys[n] for n in needs}), ""
+
+    background: dict[str, _Background] = {}
+
+    def start(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
+        """Start a stage in a worker process now, if it is to be computed (not cached)."""
+        if not (parallel and name in _BACKGROUND and name in selected and _can_fork()):
+            return
+        key, _ = key_of(name)
+        if key is None or cache.peek(name, key, ReadTracker(study)):
+            return
+        for module in _PRELOAD.get(name, ()):
+            importlib.import_module(module)
+        background[name] = _Background(compute, study)
+
     def do(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
         if name not in selected:
             return
@@ -262,17 +395,12 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
         bar.set_postfix_str(name)
         t0 = time.perf_counter()
         try:
-            if not _configured(cfg, name):
-                unavailable[name] = "not configured in the study file"
+            key, why = key_of(name)
+            if key is None:
+                unavailable[name] = why
                 return
-            needs = [n for n in STAGE_NEEDS[name]
-                     if _configured(cfg, n) or n in _HARD.get(name, ())]
-            missing = [n for n in needs if n not in results]
-            if missing:
-                unavailable[name] = f"needs the stage(s) {missing}, which did not complete"
-                return
-            key = stage_key(name, version, code_hash(*_CODE[name]),
-                            {n: cache.keys[n] for n in needs})
+            if name in background:
+                compute = background[name].result
             tracker = ReadTracker(study)
             try:
                 res, ds = cache.get(name, key, lambda: compute(TrackedStudy(study, tracker)),
@@ -286,6 +414,9 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
                 return
             except (KeyboardInterrupt, SystemExit):
                 raise
+            except _ChildError as err:
+                failed[name] = err.message
+                return
             except Exception as err:  # noqa: BLE001 - recorded, shown in the report
                 check_interrupt()
                 tb = traceback.extract_tb(err.__traceback__)[-1]
@@ -298,45 +429,76 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages)
                 arrays[name] = ds
         finally:
             timings[name] = time.perf_counter() - t0
+            if name in background and math.isfinite(background[name].wall_s):
+                timings[name] = background[name].wall_s   # its own time, in parallel
             if name in selected:
                 bar.update(1)
 
+    from ..fe._solvers import _blas_limits
     from . import _ema
     from . import _stages as st
 
-    do("ingest", st.ingest)
-    do("modal", _ema.modal)
-    do("fe", st.fe_nominal)
-    do("updating", lambda s: st.updating(s, arrays.get("modal")))
+    # one BLAS thread per process: the study's matrices are small (threads only add
+    # synchronisation), and the worker processes already use the second core; set
+    # before any worker is forked, so they inherit it
+    blas = _blas_limits()
+    blas.__enter__()
+    try:
+        # the measurement files are read in a worker process while the main one
+        # identifies the multi-point test, solves the FE model and updates it; only the
+        # damping stage needs them
+        start("ingest", st.ingest)
+        if "ingest" not in background:
+            do("ingest", st.ingest)
+        do("modal", _ema.modal)
+        do("fe", st.fe_nominal)
+        do("updating", lambda s: st.updating(s, arrays.get("modal")))
 
-    def _description(s: TrackedStudy) -> dict:
-        """The updated structure when updating ran, else the nominal one."""
-        if "updating" in results:
-            return results["updating"]["description"]
-        return s.description()
+        def _description(s: TrackedStudy) -> dict:
+            """The updated structure when updating ran, else the nominal one."""
+            if "updating" in results:
+                return results["updating"]["description"]
+            return s.description()
 
-    # the identified shapes against the updated model: MAC, COMAC, non-target predictions
-    do("correlation", lambda s: _ema.correlation(
-        s, arrays["modal"], _description(s), len(results["fe"]["fn_hz"]),
-        results.get("updating", {}).get("targets_hz")))
+        def _uncertainty(s: TrackedStudy):
+            return st.uncertainty(s, _description(s))
 
-    # Monte Carlo on the updated structure; no later stage depends on it
-    do("uncertainty", lambda s: st.uncertainty(s, _description(s)))
-    # damping pairs identified modes with the (updated) FE model's effective masses
-    do("damping", lambda s: st.damping(s, arrays["ingest"], _description(s)))
-    # the SE is built from the updated model when updating ran, else from the nominal one
-    do("reduction", lambda s: st.reduction(
-        s, _description(s), results.get("damping", {}).get("model_damping")))
+        start("uncertainty", _uncertainty)
 
-    def _control(s: TrackedStudy):
-        if "reduction" not in arrays:
-            raise ConfigError("control needs the SE plant: the [control] section needs "
-                              "[damping] (the Rayleigh pair of the plant) and [reduction]")
-        fn1 = results.get("updating", {}).get("fn_hz", [None])[0] or results["fe"]["fn_hz"][0]
-        return st.control(s, arrays["reduction"], float(fn1))
+        # the identified shapes against the updated model: MAC, COMAC, non-target predictions
+        do("correlation", lambda s: _ema.correlation(
+            s, arrays["modal"], _description(s), len(results["fe"]["fn_hz"]),
+            results.get("updating", {}).get("targets_hz")))
 
-    do("control", _control)
+        # Monte Carlo on the updated structure; no later stage depends on it (when it
+        # runs in the worker process, its result is collected after the control stage)
+        if "uncertainty" not in background:
+            do("uncertainty", _uncertainty)
+        if "ingest" in background:
+            do("ingest", st.ingest)
+        # damping pairs identified modes with the (updated) FE model's effective masses
+        do("damping", lambda s: st.damping(s, arrays["ingest"], _description(s)))
+        # the SE is built from the updated model when updating ran, else from the nominal one
+        do("reduction", lambda s: st.reduction(
+            s, _description(s), results.get("damping", {}).get("model_damping")))
 
+        def _control(s: TrackedStudy):
+            if "reduction" not in arrays:
+                raise ConfigError("control needs the SE plant: the [control] section needs "
+                                  "[damping] (the Rayleigh pair of the plant) and [reduction]")
+            fn1 = results.get("updating", {}).get("fn_hz", [None])[0] or results["fe"]["fn_hz"][0]
+            return st.control(s, arrays["reduction"], float(fn1))
+
+        do("control", _control)
+        if "uncertainty" in background:
+            do("uncertainty", _uncertainty)
+
+    finally:
+        for bg in background.values():
+            bg.abort()
+        blas.__exit__(None, None, None)
+
+    timings = {s: timings[s] for s in STAGES if s in timings}
     report_path = None
     t0 = time.perf_counter()
     if report:

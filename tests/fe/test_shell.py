@@ -317,3 +317,19 @@ def test_drilling_penalty_leaves_in_plane_bending_unchanged():
     assert abs(out[1] / out[0] - 1) < 1e-4
     ref = L**3 / (3 * mat.E * t * d**3 / 12) + L / (5 / 6 * mat.G * t * d)
     assert 0.96 < out[1] / ref < 1.0
+
+
+@pytest.mark.parametrize("shared_shapes", [32, 0])
+def test_energy_split_parts_sum_to_the_modal_strain_energy(monkeypatch, shared_shapes):
+    """An isotropic plate has no B, D16, D26 coupling: the four parts of energy_split
+    sum to phi' K phi = omega^2 of each mass-normalised mode, whether the energies are
+    summed per distinct element shape (structured mesh) or per element."""
+    import mvtk.fe._modal as modal
+
+    monkeypatch.setattr(modal, "_SHARED_SHAPES", shared_shapes)
+    model = plate_model(0.3, 0.2, [Ply(STEEL, 2e-3)], nx=6, ny=5, clamp="x0")
+    res = modal_analysis(model, 6)
+    parts = modal.energy_split(model, res.shapes)
+    np.testing.assert_allclose(parts.sum(axis=1), res.omega2, rtol=1e-9)
+    assert res.mode_type[:2] == ("bending", "torsion")
+    assert np.all(parts[:, 3] == 0)            # no beam axial part in a shell model
