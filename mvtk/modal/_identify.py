@@ -185,8 +185,12 @@ def identify(
     fmin, fmax : float, optional
         Analysis band in Hz (default: the whole FRF).
     orders : iterable of int, optional
-        pLSCF model orders (default ``2..max(20, 64 // n_reference)`` -- every order
-        gives ``n_reference`` poles).
+        pLSCF model orders. Default :func:`default_orders`, chosen from the data:
+        ``2..p_max`` with ``p_max = ceil(6 n_peaks / n_reference)`` (``n_peaks``: peaks
+        of the smoothed sum-FRF in the band, :func:`count_peaks`; every order gives
+        ``n_reference`` poles), at least ``max(20, 64 // n_reference)``, at most 160
+        poles per order and one pole per 200 lines of the band. The orders used are
+        ``result.diagram.orders``.
     fn_hz : sequence of float, optional
         Select the poles nearest these frequencies (see :func:`poles_near`) instead of
         the automatic clustering.
