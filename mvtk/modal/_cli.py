@@ -27,7 +27,9 @@ def add_parser(subparsers) -> None:
     p.add_argument("--fmin", type=float, default=None, help="band start in Hz")
     p.add_argument("--fmax", type=float, default=None, help="band end in Hz")
     p.add_argument("--orders", type=int, default=None, metavar="N",
-                   help="highest model order (pLSCF polynomial order / SSI state order)")
+                   help="highest model order (pLSCF polynomial order / SSI state order); "
+                   "pLSCF default: from the number of peaks in the band (see "
+                   "docs/guide/modal.md)")
     p.add_argument("--fn", type=float, nargs="+", metavar="HZ", default=None,
                    help="select the poles nearest these frequencies instead of clustering")
     p.add_argument("--reference", default=None,
