@@ -483,6 +483,10 @@ class OutputLock:
         self._fh = fh
         return self
 
+    def fileno(self) -> int | None:
+        """File descriptor holding the lock (None when not held or without flock)."""
+        return None if self._fh is None else self._fh.fileno()
+
     def __exit__(self, *exc) -> None:
         if self._fh is not None:
             with contextlib.suppress(OSError):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import math
 import os
@@ -237,9 +238,10 @@ def run(
     """
     study = study_path if isinstance(study_path, Study) else load_study(study_path)
     out = check_output_dir(out_dir)
-    with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait):
+    with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait) as lock:
         return _run_locked(study, out, use_cache=use_cache, progress=progress,
-                           report=report, stages=stages, parallel=parallel)
+                           report=report, stages=stages, parallel=parallel,
+                           lock_fd=lock.fileno())
 
 
 #: Stages computed in a forked worker process while the main process runs other stages:
@@ -261,8 +263,23 @@ class _ChildError(Exception):
         self.message = message
 
 
-def _child_main(conn, compute, study) -> None:
-    """Worker process: run ``compute`` on a fresh tracker and send its outcome."""
+def _die_with_parent() -> None:
+    """Ask Linux to SIGKILL this process when its parent dies (best effort elsewhere)."""
+    import ctypes
+    import signal
+
+    with contextlib.suppress(OSError, AttributeError):
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL))   # PR_SET_PDEATHSIG
+
+
+def _child_main(conn, compute, study, parent_pid, close_fds) -> None:
+    """Worker process: run ``compute`` on a fresh tracker and send its outcome.
+
+    The worker must not outlive a killed run: it dies with its parent, and it closes
+    its copies of the output folder's lock and of the pipe's read end, so that neither
+    the lock nor a blocked send keeps a rerun waiting.
+    """
     import pickle
     import signal
 
@@ -270,6 +287,12 @@ def _child_main(conn, compute, study) -> None:
 
     # Ctrl-C goes to the main process, which ends this one
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _die_with_parent()
+    if os.getppid() != parent_pid:   # the parent died before prctl took effect
+        os._exit(1)
+    for fd in close_fds:
+        with contextlib.suppress(OSError):
+            os.close(fd)
     tracker = ReadTracker(study)
     t0, c0 = time.perf_counter(), time.process_time()
     try:
@@ -294,12 +317,14 @@ def _child_main(conn, compute, study) -> None:
 class _Background:
     """One stage computed in a forked process; :meth:`result` is its ``compute``."""
 
-    def __init__(self, compute, study) -> None:
+    def __init__(self, compute, study, lock_fd: int | None = None) -> None:
         import multiprocessing as mp
 
         ctx = mp.get_context("fork")
         self._recv, send = ctx.Pipe(duplex=False)
-        self._proc = ctx.Process(target=_child_main, args=(send, compute, study),
+        close = [self._recv.fileno()] + ([] if lock_fd is None else [lock_fd])
+        self._proc = ctx.Process(target=_child_main,
+                                 args=(send, compute, study, os.getpid(), close),
                                  daemon=True)
         self._proc.start()
         send.close()
@@ -341,7 +366,7 @@ def _can_fork() -> bool:
 
 
 def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
-                parallel=True):
+                parallel=True, lock_fd=None):
     import mvtk
 
     cache = StageCache(out / "cache", enabled=use_cache)
@@ -386,7 +411,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
             return
         for module in _PRELOAD.get(name, ()):
             importlib.import_module(module)
-        background[name] = _Background(compute, study)
+        background[name] = _Background(compute, study, lock_fd)
 
     def do(name: str, compute: Callable[[TrackedStudy], tuple[dict, Any]]) -> None:
         if name not in selected:

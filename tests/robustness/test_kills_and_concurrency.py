@@ -93,3 +93,50 @@ def test_two_concurrent_runs_into_one_folder(clean_run, tmp_path):
     cached = "cached stages: ingest, modal, fe, updating, correlation"
     assert sum(cached in r[0] for r in results) == 1
     _same_tables(clean_run[1], out)
+
+
+def _children(pid: int) -> list[int]:
+    """Process ids whose parent is ``pid`` (Linux /proc)."""
+    kids = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            kids.append(int(stat.parent.name))
+    return kids
+
+
+def _running(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state not in ("Z", "X")
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_a_killed_run_leaves_no_worker_holding_the_folder(tmp_path):
+    """A forked stage worker (ingest, Monte Carlo) of a run killed with SIGKILL used to
+    live on holding the output folder's lock, and the rerun waited for ever. The worker
+    now dies with its parent and never holds the lock itself."""
+    from mvtk.study._cache import OutputLock
+
+    study = write_fast_study(tmp_path / "in")
+    out = tmp_path / "out"
+    proc = subprocess.Popen(_cmd(study, out), env=_env(), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    t0, kids = time.monotonic(), []
+    while not kids and proc.poll() is None and time.monotonic() - t0 < 120:
+        kids = [k for k in _children(proc.pid) if _running(k)]
+        time.sleep(0.02)
+    assert kids, "the run started no worker process"
+    proc.kill()
+    proc.wait(timeout=60)
+    t0 = time.monotonic()
+    while any(_running(k) for k in kids) and time.monotonic() - t0 < 20:
+        time.sleep(0.1)
+    assert not any(_running(k) for k in kids), "a worker outlived the killed run"
+    with OutputLock(out, timeout_s=5.0):   # the folder is free at once
+        pass
