@@ -9,6 +9,10 @@ from pathlib import Path
 
 __all__ = ["add_parser"]
 
+#: Mesh and FE-deck files that a user may pass by mistake instead of a structure TOML.
+_MESH_SUFFIXES = (".msh", ".inp", ".vtu", ".vtk", ".med", ".xdmf", ".bdf", ".dat", ".nas",
+                  ".unv", ".op4", ".mtx")
+
 
 def add_parser(subparsers) -> None:
     """Register the ``modes`` sub-command."""
@@ -31,6 +35,15 @@ def run(args: argparse.Namespace) -> int:
     from ._modal import modal_analysis
     from ._structure import build_model, resolve_mesh_file
 
+    path = Path(args.structure)
+    if path.suffix.lower() in _MESH_SUFFIXES:
+        from ..errors import ConfigError
+
+        raise ConfigError(
+            f"{str(path)!r} is a mesh file, not a structure TOML: a mesh carries no "
+            "materials, sections or supports. Write a structure TOML around it with "
+            f"`mvtk init DIR --structure {path}`, edit what it marks EDIT, then run "
+            "`mvtk modes DIR/structure.toml`")
     # UTF-8, UTF-8 with BOM or UTF-16 with BOM; a clear error naming the byte otherwise
     model = build_model(resolve_mesh_file(read_toml(args.structure, "structure file"),
                                           Path(args.structure).resolve().parent))

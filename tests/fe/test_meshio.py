@@ -304,3 +304,16 @@ def test_mesh_file_is_found_relative_to_the_structure_file_from_any_directory(
     assert main(["modes", str(toml), "-n", "2"]) == 0
     out = capsys.readouterr().out
     assert "in-plane" in out or "bending" in out, out
+
+
+def test_modes_on_a_mesh_file_points_to_init(capsys):
+    """A newcomer's `mvtk modes part.msh` gave "invalid TOML: Expected '=' after a key";
+    it now says what a mesh lacks and which command writes the structure TOML."""
+    from mvtk.cli import main
+
+    msh = DATA / "curved_panel" / "curved_panel.msh"
+    assert main(["modes", str(msh)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "is a mesh file, not a structure TOML" in err
+    assert f"`mvtk init DIR --structure {msh}`" in err
