@@ -236,6 +236,16 @@ def test_figure_format_auto_picks_the_smaller():
     sec.figure(line, image_format="png").figure(line, image_format="svg")
     mimes = re.findall(r'src="data:([^;]+);base64', "".join(sec.blocks))
     assert mimes[2:] == ["image/png", "image/svg+xml"]
+    # a line plot whose SVG exceeds SVG_KEEP_BYTES: both rendered, the smaller (PNG) kept
+    from mvtk.report._html import SVG_KEEP_BYTES, _figure_bytes
+
+    dense = Figure(figsize=(7, 3))
+    dense.add_subplot().plot(np.random.default_rng(2).random(20_000))
+    mime, data = _figure_bytes(dense, "auto")
+    buf = io.BytesIO()
+    with matplotlib.rc_context({"svg.fonttype": "none"}):
+        dense.savefig(buf, format="svg")
+    assert len(buf.getvalue()) > SVG_KEEP_BYTES > len(data) and mime == "image/png"
 
 
 def test_minmax_decimate_keeps_every_bin_extremum():
