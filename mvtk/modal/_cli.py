@@ -34,7 +34,10 @@ def add_parser(subparsers) -> None:
                    help="select the poles nearest these frequencies instead of clustering")
     p.add_argument("--reference", default=None,
                    help="force channel(s) of time histories (default: quantity force)")
-    p.add_argument("--impact", action="store_true", help="impact test: one record per hit")
+    p.add_argument("--excitation", choices=("auto", "random", "impact", "sweep"),
+                   default="auto", help="time histories: default auto, impact if the "
+                   "reference is a pulse, sweep if it sweeps, else random")
+    p.add_argument("--impact", action="store_true", help="same as --excitation impact")
     p.add_argument("--nperseg", type=int, default=None, help="FRF segment/record length")
     p.add_argument("--df-hz", type=float, default=None,
                    help="line spacing for text files of complex FRF values without a "
@@ -109,7 +112,7 @@ def _identify(args):
         if has_force or args.reference is not None:
             sets = [first] + [io.read(p) for p in args.files[1:]]
             ref = args.reference if args.reference is not None else {"quantity": "force"}
-            h = frf_matrix(sets, ref, excitation="impact" if args.impact else "random",
+            h = frf_matrix(sets, ref, excitation="impact" if args.impact else args.excitation,
                            nperseg=args.nperseg)
             return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
         ssi_orders = range(2, 61, 2) if args.orders is None else range(2, args.orders + 1, 2)

@@ -334,7 +334,7 @@ def frf_matrix(
     response=None,
     *,
     estimator: str = "H1",
-    excitation: str = "random",
+    excitation: str = "auto",
     **frf_options,
 ) -> xr.DataArray:
     """FRF matrix from measured time histories: one set, or several merged by node.
@@ -362,6 +362,9 @@ def frf_matrix(
     estimator, excitation, **frf_options
         Passed to :func:`mvtk.signal.frf` (``nperseg``, ``window``, ``trigger_level``,
         ``exponential_tau_s``...). All sets must give the same frequency lines.
+        ``excitation="auto"`` (default) detects impact, sweep or random excitation from
+        each set's reference, as :func:`mvtk.signal.frf` does; every set must be found
+        the same.
 
     Returns
     -------
@@ -383,6 +386,12 @@ def frf_matrix(
         raise ParameterError("frf_matrix: 'sets' must be a time history or a non-empty list")
     kwargs = dict(estimator=estimator, excitation=excitation, **frf_options)
     parts = [_one_set(x, reference, response, kwargs, k + 1) for k, x in enumerate(sets)]
+    kinds = [str(p[2].get("excitation", excitation)) for p in parts]
+    for k, kind in enumerate(kinds):
+        if kind != kinds[0]:
+            raise ParameterError(
+                f"measurement set {k + 1}: {kind} excitation, but set 1 is {kinds[0]}; "
+                "pass excitation= explicitly to treat every set alike")
     f0 = parts[0][0]["frequency"].values
     rkeys: dict = {}
     fkeys: dict = {}
@@ -462,7 +471,7 @@ def frf_matrix(
     a0 = parts[0][2]
     out = as_frf_matrix(da)
     out = out.assign_coords(coherence=(_DIMS, np.clip(coh, 0, 1)))
-    out.attrs.update(estimator=estimator, excitation=excitation, n_averages=n_avg,
+    out.attrs.update(estimator=estimator, excitation=kinds[0], n_averages=n_avg,
                      n_sets=len(parts), window=str(a0.get("window", "")),
                      df_hz=float(f0[1] - f0[0]))
     if "exponential_window_tau_s" in a0:

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from mvtk import io, modal
+from mvtk.errors import ParameterError
 from mvtk.modal._identify import (
     LINES_PER_POLE,
     MAX_POLES,
@@ -60,8 +61,20 @@ def test_default_orders_floor_and_caps(msys):
 
 def _lvm_default(modal_data, name):
     ds = io.read(modal_data / "lvm" / f"{name}.lvm")
-    h = modal.frf_matrix([ds], {"quantity": "force"}, excitation="impact")
+    h = modal.frf_matrix([ds], {"quantity": "force"})   # excitation detected
+    assert h.attrs["excitation"] == "impact"
     return modal.identify(h)            # defaults: whole FRF, orders from the data
+
+
+@pytest.mark.shared_data
+def test_mixed_excitation_sets_are_refused(modal_data):
+    """A hammer set and a set whose force is random noise cannot share one FRF grid
+    unless the user says how to treat them."""
+    hit = io.read(modal_data / "lvm" / "acceleration.lvm")["time_history"]
+    noise = hit.copy(data=np.random.default_rng(3).standard_normal(hit.shape))
+    with pytest.raises(ParameterError, match="measurement set 2: random excitation, but "
+                       "set 1 is impact; pass excitation= explicitly"):
+        modal.frf_matrix([hit, noise], {"quantity": "force"})
 
 
 def _near(res, f0, rtol):
