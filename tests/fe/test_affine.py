@@ -10,46 +10,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.io
+from affine_plate import assemble, dof_table, plate_mesh
 
 from mvtk.errors import ConfigError, DimensionError, FormatError, ParameterError
 from mvtk.fe import (
     AffineModel,
-    IsotropicMaterial,
-    Laminate,
-    Ply,
-    ShellSet,
-    assemble_model,
     eigsh_lowest,
 )
-
-NX, NY, A, B, H = 8, 4, 0.4, 0.2, 0.002
 
 
 def _plate_parts():
     """A clamped plate and its left / right halves assembled separately."""
-    xs, ys = np.linspace(0, A, NX + 1), np.linspace(0, B, NY + 1)
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    i, j = np.meshgrid(np.arange(NX), np.arange(NY), indexing="ij")
-    base = (i * (NY + 1) + j).ravel()
-    quads = np.column_stack([base, base + NY + 1, base + NY + 2, base + 1])
-    left = quads[i.ravel() < NX // 2]
-    right = quads[i.ravel() >= NX // 2]
-    lam = Laminate([Ply(IsotropicMaterial("al", 70e9, 0.33, 2700.0), H)])
-    sets = {"clamp": np.arange(NY + 1)}
-
-    def build(q, name, supports):
-        return assemble_model(nodes, [ShellSet(q, lam, name=name)], supports=supports,
-                              node_sets=sets)
-
-    whole = assemble_model(nodes, [ShellSet(left, lam, name="left"),
-                                   ShellSet(right, lam, name="right")],
-                           supports={"clamp": "clamped"}, node_sets=sets)
-    return whole, build(left, "left", {"clamp": "clamped"}), build(right, "right", None)
-
-
-def _dof_table(model):
-    return np.column_stack([model.node_ids[model.dof_node], model.dof_component + 1])
+    nodes, halves = plate_mesh()
+    return (assemble(nodes, halves), assemble(nodes, {"left": halves["left"]}),
+            assemble(nodes, {"right": halves["right"]}, clamped=False))
 
 
 def _export(tmp_path, model, stem):
@@ -57,7 +31,7 @@ def _export(tmp_path, model, stem):
     scipy.io.mmwrite(tmp_path / f"{stem}_M.mtx", model.M)
     with open(tmp_path / f"{stem}_dofs.csv", "w") as f:
         f.write("node,dof\n")
-        for n, c in _dof_table(model):
+        for n, c in dof_table(model):
             f.write(f"{n},{c}\n")
     return {"K": tmp_path / f"{stem}_K.mtx", "M": tmp_path / f"{stem}_M.mtx",
             "dof_table": tmp_path / f"{stem}_dofs.csv"}
@@ -73,7 +47,7 @@ def test_parts_from_files_sum_to_the_whole_model(plate, tmp_path):
     assert left.n_dof < whole.n_dof and right.n_dof < whole.n_dof  # own DOFs only
     am = AffineModel.from_files({"left": _export(tmp_path, left, "left"),
                                  "right": _export(tmp_path, right, "right")},
-                                dof_table=_dof_table(whole))
+                                dof_table=dof_table(whole))
     m = am.model()
     assert m.n_dof == whole.n_dof
     np.testing.assert_array_equal(m.node_ids[m.dof_node], whole.node_ids[whole.dof_node])
@@ -97,10 +71,10 @@ def test_mat_file_parts_base_and_stiffness_only_parts(plate, tmp_path):
     scipy.io.savemat(tmp_path / "left.mat", {"K": left.K, "M": left.M})
     am = AffineModel.from_files(
         {"left": {"K": tmp_path / "left.mat", "M": tmp_path / "left.mat",
-                  "dof_table": _dof_table(left)},
-         "right_stiffness": {"K": right.K, "dof_table": _dof_table(right)}},
-        base={"M": right.M, "dof_table": _dof_table(right)},
-        dof_table=_dof_table(whole), theta0={"right_stiffness": 1.0},
+                  "dof_table": dof_table(left)},
+         "right_stiffness": {"K": right.K, "dof_table": dof_table(right)}},
+        base={"M": right.M, "dof_table": dof_table(right)},
+        dof_table=dof_table(whole), theta0={"right_stiffness": 1.0},
         nodes=np.column_stack([whole.node_ids, whole.nodes]))
     m = am.model()
     np.testing.assert_array_equal(m.dof_node, whole.dof_node)
@@ -127,23 +101,23 @@ def test_bad_inputs(plate, tmp_path):
     with pytest.raises(ConfigError, match="must be an identifier"):
         AffineModel.from_files({"left skin": part})
     with pytest.raises(DimensionError, match="DOF table of part 'left' has"):
-        AffineModel.from_files({"left": {"K": part["K"], "dof_table": _dof_table(right)}})
+        AffineModel.from_files({"left": {"K": part["K"], "dof_table": dof_table(right)}})
     # a part DOF the model table does not list: node and dof named
     with pytest.raises(FormatError, match=r"part 'right': node \d+ dof \w+ is not in the "
                                           "model's DOF table"):
         AffineModel.from_files({"left": part, "right": _export(tmp_path, right, "right")},
-                               dof_table=_dof_table(left))
-    dup = _dof_table(left).copy()
+                               dof_table=dof_table(left))
+    dup = dof_table(left).copy()
     dup[1] = dup[0]
     with pytest.raises(FormatError, match="appears twice"):
         AffineModel.from_files({"left": {"K": left.K, "dof_table": dup}})
     with pytest.raises(DimensionError, match="not symmetric"):
         bad = left.K.tolil()
         bad[0, 1] += 1e-3 * abs(left.K).max()
-        AffineModel.from_files({"left": {"K": bad, "dof_table": _dof_table(left)}})
+        AffineModel.from_files({"left": {"K": bad, "dof_table": dof_table(left)}})
     with pytest.raises(FormatError, match="no variable 'M'"):
         scipy.io.savemat(tmp_path / "k_only.mat", {"K": left.K})
-        AffineModel.from_files({"left": tmp_path / "k_only.mat"}, dof_table=_dof_table(left))
+        AffineModel.from_files({"left": tmp_path / "k_only.mat"}, dof_table=dof_table(left))
     with pytest.raises(ConfigError, match=r"theta0: unknown part\(s\) \['skin'\]"):
         AffineModel.from_files({"left": part}, theta0={"skin": 1.0})
     am = AffineModel.from_files({"left": part})

@@ -13,51 +13,29 @@ import numpy as np
 import pytest
 import scipy.io
 import scipy.linalg as sl
+from affine_plate import assemble, dof_table, plate_mesh
 
 from mvtk.fe import (
     AffineModel,
-    IsotropicMaterial,
-    Laminate,
-    Ply,
-    ShellSet,
-    assemble_model,
     eigsh_lowest,
 )
 from mvtk.updating import Parameter, eigen_sensitivity, update
 
-NX, NY, A, B, H = 8, 4, 0.4, 0.2, 0.002
 THETA_TRUE = {"left": 1.25, "right": 0.8}
-
-
-def _table(model):
-    return np.column_stack([model.node_ids[model.dof_node], model.dof_component + 1])
-
-
 @pytest.fixture(scope="module")
 def affine(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("affine")
-    xs, ys = np.linspace(0, A, NX + 1), np.linspace(0, B, NY + 1)
-    X, Y = np.meshgrid(xs, ys, indexing="ij")
-    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
-    i, j = np.meshgrid(np.arange(NX), np.arange(NY), indexing="ij")
-    base = (i * (NY + 1) + j).ravel()
-    quads = np.column_stack([base, base + NY + 1, base + NY + 2, base + 1])
-    lam = Laminate([Ply(IsotropicMaterial("al", 70e9, 0.33, 2700.0), H)])
-    sets = {"clamp": np.arange(NY + 1)}
-    halves = {"left": quads[i.ravel() < NX // 2], "right": quads[i.ravel() >= NX // 2]}
-    whole = assemble_model(nodes, [ShellSet(q, lam, name=k) for k, q in halves.items()],
-                           supports={"clamp": "clamped"}, node_sets=sets)
+    nodes, halves = plate_mesh()
+    whole = assemble(nodes, halves)
     parts = {}
     for k, q in halves.items():
-        m = assemble_model(nodes, [ShellSet(q, lam, name=k)],
-                           supports={"clamp": "clamped"} if k == "left" else None,
-                           node_sets=sets)
+        m = assemble(nodes, {k: q}, clamped=k == "left")
         scipy.io.mmwrite(tmp / f"{k}_K.mtx", m.K)
-        np.savetxt(tmp / f"{k}_dofs.csv", _table(m), fmt="%d", delimiter=",",
+        np.savetxt(tmp / f"{k}_dofs.csv", dof_table(m), fmt="%d", delimiter=",",
                    header="node,dof", comments="")
         parts[k] = {"K": tmp / f"{k}_K.mtx", "dof_table": tmp / f"{k}_dofs.csv"}
     scipy.io.mmwrite(tmp / "M.mtx", whole.M)
-    np.savetxt(tmp / "dofs.csv", _table(whole), fmt="%d", delimiter=",")
+    np.savetxt(tmp / "dofs.csv", dof_table(whole), fmt="%d", delimiter=",")
     return AffineModel.from_files(parts, base={"M": tmp / "M.mtx"},
                                   dof_table=tmp / "dofs.csv")
 
