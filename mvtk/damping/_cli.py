@@ -22,7 +22,7 @@ _VARIANTS = {"half_power": ("fit", "interpolate"), "envelope": ("hilbert", "peak
 
 def add_parser(subparsers) -> None:
     """Register the ``damping`` sub-command."""
-    from ..io._cli import parse_option
+    from ..io._cli import add_reader_options
 
     p = subparsers.add_parser(
         "damping",
@@ -35,17 +35,7 @@ def add_parser(subparsers) -> None:
         "estimate is reliable, 1 if none is, 2 on bad input.",
     )
     p.add_argument("file", help="measurement file readable by mvtk.io.read")
-    rd = p.add_argument_group("reader options (as mvtk read)")
-    rd.add_argument("--format", default=None, help="force a reader (default: detect)")
-    rd.add_argument("--set", action="append", type=parse_option, metavar="KEY=VALUE",
-                    help="reader option, value as JSON or text (repeatable), e.g. "
-                    "--set data='[\"F\", \"a\"]'")
-    rd.add_argument("--variable", nargs="+", default=None, metavar="NAME",
-                    help="variable(s) of the file holding the data (reader option data=)")
-    rd.add_argument("--units", nargs="+", default=None, help="units per channel (reader)")
-    rd.add_argument("--quantity", nargs="+", default=None,
-                    help="quantity per channel, e.g. force acceleration (reader)")
-    rd.add_argument("--fs", type=float, default=None, help="sampling rate in Hz (reader)")
+    add_reader_options(p)
     est = p.add_argument_group("estimator")
     est.add_argument("--method", choices=_METHODS, default="auto",
                      help="estimator (default auto: half_power on FRFs/spectra and on time "
@@ -76,16 +66,6 @@ def add_parser(subparsers) -> None:
     dec.add_argument("--t-end", type=float, default=None, help="end of the time window (s)")
     p.add_argument("--json", action="store_true", help="print the result table as JSON")
     p.set_defaults(func=run)
-
-
-def _reader_options(args) -> dict:
-    opts = dict(args.set or [])
-    for key, val in (("units", args.units), ("quantity", args.quantity), ("fs", args.fs)):
-        if val is not None:
-            opts[key] = val
-    if args.variable is not None:
-        opts["data"] = args.variable[0] if len(args.variable) == 1 else args.variable
-    return opts
 
 
 def _has_reference(ds, args) -> bool:
@@ -136,6 +116,7 @@ def run(args: argparse.Namespace) -> int:
 
     from .. import io
     from ..errors import ParameterError
+    from ..io._cli import reader_options
     from ._common import NoEstimateError
     from ._decay import envelope_fit, log_decrement
     from ._half_power import half_power
@@ -146,7 +127,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            ds = io.read(args.file, format=args.format, **_reader_options(args))
+            ds = io.read(args.file, **reader_options(args))
             if method == "auto":
                 method = "half_power"
                 if "time_history" in ds.data_vars and not _has_reference(ds, args) and not any(

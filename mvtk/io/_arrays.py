@@ -146,12 +146,13 @@ def build_from_arrays(
         rate = r
     if rate is None:
         raise FormatError(
-            f"{path}: no sampling rate; expected time='<name>', fs=<Hz or name> or dt=<s or name>"
+            f"{path}: no sampling rate; expected time='<name>', fs=<Hz or name> or dt=<s or name> "
+            "(on the command line --set time=NAME, --fs HZ or --set dt=S)"
         )
     if units is None:
         raise FormatError(
             f"{path}: the file stores no units for channels {names}; expected units=[...] "
-            "(one per channel)"
+            "(one per channel; on the command line --units U1 U2 ...)"
         )
     var_attrs = {"t0_s": extra.pop("t0_s")} if "t0_s" in extra else None
     variables = [build_time_history(block, rate, names, units, quantity, attrs=var_attrs)]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 
-__all__ = ["add_parser", "parse_option", "summary"]
+__all__ = ["add_parser", "add_reader_options", "parse_option", "reader_options", "summary"]
 
 
 def parse_option(text: str) -> tuple[str, object]:
@@ -17,6 +17,48 @@ def parse_option(text: str) -> tuple[str, object]:
         return key, json.loads(value)
     except json.JSONDecodeError:
         return key, value
+
+
+def add_reader_options(parser: argparse.ArgumentParser) -> None:
+    """Add the reader options group shared by ``mvtk read``, ``damping`` and ``modal``.
+
+    Every option of :func:`mvtk.io.read` is reachable as ``--set KEY=VALUE``; the common
+    ones (the ones a reader's error message asks for when a file does not state them)
+    have their own flags: ``--units``, ``--quantity``, ``--fs`` and ``--variable``
+    (the reader option ``data=``).
+    """
+    rd = parser.add_argument_group("reader options (mvtk.io.read)")
+    rd.add_argument("--format", default=None, help="force a reader (default: detect)")
+    rd.add_argument("--set", action="append", type=parse_option, metavar="KEY=VALUE",
+                    help="reader option, value as JSON or text (repeatable), e.g. "
+                    "--set units='[\"N\", \"m/s^2\"]'")
+    rd.add_argument("--variable", nargs="+", default=None, metavar="NAME",
+                    help="variable(s) of the file holding the data (reader option data=)")
+    rd.add_argument("--units", nargs="+", default=None, metavar="UNIT",
+                    help="units per channel, for files that store none (reader option "
+                    "units=), e.g. --units N m/s^2 V")
+    rd.add_argument("--quantity", nargs="+", default=None, metavar="Q",
+                    help="quantity per channel, e.g. force acceleration (reader option "
+                    "quantity=)")
+    rd.add_argument("--fs", type=float, default=None, metavar="HZ",
+                    help="sampling rate in Hz, for files that store none (reader option fs=)")
+
+
+def reader_options(args: argparse.Namespace) -> dict:
+    """The keyword arguments of :func:`mvtk.io.read` given by :func:`add_reader_options`.
+
+    The named flags win over the same key given with ``--set``; ``format`` is included
+    when given.
+    """
+    opts = dict(args.set or [])
+    for key, val in (("units", args.units), ("quantity", args.quantity), ("fs", args.fs)):
+        if val is not None:
+            opts[key] = val
+    if args.variable is not None:
+        opts["data"] = args.variable[0] if len(args.variable) == 1 else args.variable
+    if args.format is not None:
+        opts["format"] = args.format
+    return opts
 
 
 def summary(ds) -> str:
@@ -52,8 +94,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         if args.output:
             check_output_file(args.output, "--output")  # before reading
-        options = dict(args.set or [])
-        ds = read(args.path, format=args.format, **options)
+        ds = read(args.path, **reader_options(args))
         print(summary(ds))
         if args.output:
             write(ds, args.output)
@@ -76,13 +117,6 @@ def add_parser(subparsers) -> None:
         "optionally write it to netCDF.",
     )
     p.add_argument("path", help="measurement file")
-    p.add_argument("--format", default=None, help="force a reader (default: detect)")
-    p.add_argument(
-        "--set",
-        action="append",
-        type=parse_option,
-        metavar="KEY=VALUE",
-        help='reader option, value as JSON or text, e.g. --set units=\'["N", "m/s^2"]\'',
-    )
+    add_reader_options(p)
     p.add_argument("--output", "-o", default=None, help="write the Dataset to this netCDF file")
     p.set_defaults(func=_run)

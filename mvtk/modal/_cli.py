@@ -13,6 +13,8 @@ __all__ = ["add_parser", "load_frf"]
 
 def add_parser(subparsers) -> None:
     """Register the ``modal`` sub-command."""
+    from ..io._cli import add_reader_options
+
     p = subparsers.add_parser(
         "modal",
         help="experimental/operational modal analysis (pLSCF+LSFD, SSI-cov)",
@@ -49,11 +51,24 @@ def add_parser(subparsers) -> None:
     p.add_argument("--uff-frf", default=None, metavar="PATH",
                    help="write the synthesised FRFs as UFF 58")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_reader_options(p)
     p.set_defaults(func=run)
 
 
-def load_frf(paths, *, df_hz=None, frf_type=None):
-    """FRF matrix from one or several FRF files, merged along the responses."""
+def _read_options(path, df_hz=None, options=None) -> dict:
+    """Reader options for one file: ``options`` plus ``df_hz`` for text files."""
+    opts = dict(options or {})
+    if df_hz is not None and Path(path).suffix.lower() in (".txt", ".csv", ".tsv", ".dat",
+                                                           ".asc"):
+        opts["df_hz"] = df_hz
+    return opts
+
+
+def load_frf(paths, *, df_hz=None, frf_type=None, options=None):
+    """FRF matrix from one or several FRF files, merged along the responses.
+
+    ``options`` are reader options (:func:`mvtk.io.read` keywords) applied to every file.
+    """
     import numpy as np
     import xarray as xr
 
@@ -63,9 +78,8 @@ def load_frf(paths, *, df_hz=None, frf_type=None):
 
     mats = []
     for p in paths:
-        opts = {"df_hz": df_hz} if df_hz is not None and Path(p).suffix.lower() in (
-            ".txt", ".csv", ".tsv", ".dat", ".asc") else {}
-        mats.append((p, as_frf_matrix(io.read(p, **opts), frf_type=frf_type)))
+        mats.append((p, as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)),
+                                      frf_type=frf_type)))
     if len(mats) == 1:
         return mats[0][1]
     f0 = mats[0][1]["frequency"].values
@@ -98,19 +112,20 @@ def _identify(args):
     import numpy as np
 
     from .. import io
+    from ..io._cli import reader_options
     from ._frf import frf_matrix
     from ._identify import identify
     from ._ssi import identify_output_only
 
-    first = io.read(args.files[0], **({"df_hz": args.df_hz} if args.df_hz and Path(
-        args.files[0]).suffix.lower() in (".txt", ".csv", ".tsv", ".dat", ".asc") else {}))
+    options = reader_options(args)
+    first = io.read(args.files[0], **_read_options(args.files[0], args.df_hz, options))
     orders = None if args.orders is None else range(2, args.orders + 1)
     if "time_history" in first.data_vars:
         th = first["time_history"]
         has_force = "quantity" in th.coords and "force" in {str(q) for q in
                                                             th["quantity"].values}
         if has_force or args.reference is not None:
-            sets = [first] + [io.read(p) for p in args.files[1:]]
+            sets = [first] + [io.read(p, **options) for p in args.files[1:]]
             ref = args.reference if args.reference is not None else {"quantity": "force"}
             h = frf_matrix(sets, ref, excitation="impact" if args.impact else args.excitation,
                            nperseg=args.nperseg)
@@ -118,7 +133,7 @@ def _identify(args):
         ssi_orders = range(2, 61, 2) if args.orders is None else range(2, args.orders + 1, 2)
         return identify_output_only(first, args.fmin, args.fmax, orders=ssi_orders,
                                     fn_hz=args.fn)
-    h = load_frf(args.files, df_hz=args.df_hz, frf_type=args.frf_type)
+    h = load_frf(args.files, df_hz=args.df_hz, frf_type=args.frf_type, options=options)
     del np
     return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
 
