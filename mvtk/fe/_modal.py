@@ -260,15 +260,24 @@ def mode_type(model: FEModel, shape: np.ndarray) -> str:
     """Label an elastic mode ``"bending"``, ``"torsion"``, ``"in-plane"`` or ``"axial"``.
 
     The label is the largest part of the mode's strain energy (:func:`energy_split`);
-    ties go to the first in :data:`ENERGY_PARTS`. It depends on no node order, mesh
+    ties go to the first in :data:`ENERGY_PARTS`. On curved shells a flexural mode can
+    store most of its strain energy in membrane stretching: when the membrane part is the
+    largest and the motion normal to the shell surface carries at least half of the
+    shells' translational kinetic energy, the mode is labelled by the larger of its
+    bending and torsion parts (see :mod:`mvtk.fe._mode_labels`); ``"in-plane"`` is left
+    for modes that move in the surface. The label depends on no node order, mesh
     symmetry or eigenvector sign, so it is the same for every run and for a rotated copy
     of the model (with the material axis rotated too). Models without element groups
     (assembled matrices) are labelled from the kinetic energy per DOF component:
     ``"in-plane"`` when ux and uy carry more than uz, else ``"bending"``.
     """
-    e = energy_split(model, shape)[0]
-    if np.all(np.isfinite(e)) and e.sum() > 0:
-        return ENERGY_PARTS[int(np.argmax(e))]
+    from ._mode_labels import label_modes
+
+    phi = np.asarray(shape, dtype=float)
+    label = label_modes(model, phi[:, None] if phi.ndim == 1 else phi,
+                        energy_split(model, shape), ENERGY_PARTS)[0]
+    if label is not None:
+        return label
     phi = np.asarray(shape, dtype=float)
     ke = phi * (model.M @ phi)
     comp = np.bincount(model.dof_component, weights=ke, minlength=6)
@@ -418,13 +427,16 @@ def modal_analysis(
     fn = np.where(rigid, 0.0, np.sqrt(np.abs(w2)) / (2 * np.pi))
     order = np.lexsort((w2, fn))
     w2, fn, rigid, vecs = w2[order], fn[order], rigid[order], sol.vectors[:, order]
+    from ._mode_labels import label_modes
+
     split = energy_split(model, vecs)
+    by_energy = label_modes(model, vecs, split, ENERGY_PARTS)
     labels = []
     for i, r in enumerate(rigid):
         if r:
             labels.append("rigid")
-        elif np.all(np.isfinite(split[i])) and split[i].sum() > 0:
-            labels.append(ENERGY_PARTS[int(np.argmax(split[i]))])
+        elif by_energy[i] is not None:
+            labels.append(by_energy[i])
         else:
             labels.append(mode_type(model, vecs[:, i]))
     return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
