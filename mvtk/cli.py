@@ -28,6 +28,7 @@ import importlib
 import importlib.util
 import os
 import sys
+import warnings
 
 from . import __version__
 from ._interrupt import check_interrupt, interrupt_latch
@@ -75,6 +76,28 @@ def _os_message(err: OSError) -> str:
     return _one_line(str(err)) or reason
 
 
+@contextlib.contextmanager
+def plain_warnings(prog: str):
+    """Show warnings that reach the top as one line ``prog: Category: message``.
+
+    Python's default display adds the library's file, line number and source line,
+    which tell a command-line user nothing; commands that collect their warnings into
+    their output are not affected.
+    """
+    old = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        stream = file if file is not None else sys.stderr
+        with contextlib.suppress(OSError, ValueError):
+            print(f"{prog}: {category.__name__}: {_one_line(message)}", file=stream)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = old
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the ``mvtk`` command line; returns the exit status (see the module docstring)."""
     try:
@@ -88,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     prog = f"mvtk {args.command}"
     try:
-        with interrupt_latch():
+        with interrupt_latch(), plain_warnings(prog):
             status = int(args.func(args) or 0)
             check_interrupt()  # received, but swallowed where Python cannot raise it
         return status
