@@ -9,10 +9,11 @@ __all__ = ["add_parser"]
 
 
 def _init(args: argparse.Namespace) -> int:
+    from .io._cli import reader_options
     from .study._init import init_study
 
     res = init_study(args.folder, structure=args.structure, measurements=args.measurements,
-                     name=args.name, overwrite=args.force)
+                     name=args.name, overwrite=args.force, read_options=reader_options(args))
     print(f"wrote {res.study}")
     if args.structure is None:
         print(f"wrote {res.structure} (a placeholder plate: edit it to your structure)")
@@ -43,4 +44,7 @@ def add_parser(subparsers) -> None:
                    help="measurement files (any format of mvtk read)")
     p.add_argument("--name", default=None, help="study name (default: the folder name)")
     p.add_argument("--force", action="store_true", help="overwrite existing files")
+    from .io._cli import add_reader_options
+
+    add_reader_options(p)
     p.set_defaults(func=_init)

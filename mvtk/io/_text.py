@@ -509,7 +509,8 @@ def read_text(
         if u is None or not str(u).strip():
             raise FormatError(
                 f"{path}{where}: channel {ch_names[j]!r} (column {k + 1}) has no units; "
-                "expected 'name [unit]' in the header, a units row, or units=[...]"
+                "expected 'name [unit]' in the header, a units row, or units=[...] (--units "
+                "on the command line, read_options in a study)"
             )
         ch_units.append(normalize_units(str(u)))
     ch_quantity = _per_channel_option(quantity, n_ch, "quantity")

@@ -34,7 +34,7 @@ def _png(fig) -> str:
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _frf_of(path):
+def _frf_of(path, options=None):
     import mvtk.io
     import mvtk.modal
 
@@ -42,7 +42,7 @@ def _frf_of(path):
         # a UFF file of a multi-point test holds its geometry (dataset 15) beside the
         # FRFs: the reader's note that it skipped it is expected here
         warnings.filterwarnings("ignore", message=r".*dataset type 15 is not measurement")
-        obj = mvtk.io.read(path)
+        obj = mvtk.io.read(path, **(options or {}))
     try:
         return mvtk.modal.as_frf_matrix(obj)
     except Exception as err:  # noqa: BLE001 - re-raised with the study key named
@@ -64,7 +64,7 @@ def modal(study):
 
     cfg = study.section("modal")
     path = study.extra_file("modal_file")
-    frf = _frf_of(path)
+    frf = _frf_of(path, dict(cfg.get("read_options") or {}))
     orders = None
     if cfg.get("max_order") is not None:
         orders = range(2, int(cfg["max_order"]) + 1)

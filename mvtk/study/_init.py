@@ -86,14 +86,21 @@ def _rel(path: Path, start: Path) -> str:
     return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
 
 
-def _classify(path: Path) -> dict:
+def _inline_table(options: dict) -> str:
+    """A TOML inline table of reader options (strings, numbers, booleans, lists)."""
+    import json
+
+    return "{" + ", ".join(f"{k} = {json.dumps(v)}" for k, v in options.items()) + "}"
+
+
+def _classify(path: Path, options: dict | None = None) -> dict:
     """What test a file holds: an impact test, a free decay, or a multi-point FRF set."""
     import mvtk.damping
     import mvtk.io
     import mvtk.signal
 
     try:
-        ds = mvtk.io.read(path)
+        ds = mvtk.io.read(path, **(options or {}))
     except MvtkError as err:
         return {"file": path, "kind": "skipped", "why": f"not readable: {err}"}
     if "frf" in ds and "time_history" not in ds:
@@ -143,8 +150,8 @@ def _fmt_list(values) -> str:
 
 
 def init_study(folder: str | Path, *, structure: str | Path | None = None,
-               measurements=(), name: str | None = None, overwrite: bool = False
-               ) -> InitResult:
+               measurements=(), name: str | None = None, overwrite: bool = False,
+               read_options: dict | None = None) -> InitResult:
     """Write ``folder/study.toml`` (and ``folder/structure.toml`` without ``structure``).
 
     Parameters
@@ -164,6 +171,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     name : str, optional
         Study name (default: the folder name).
     overwrite : bool
+    read_options : dict, optional
+        Reader options (:func:`mvtk.io.read` keywords, e.g. ``units``, ``quantity``,
+        ``fs``) for files that do not state them; used to read every measurement file
+        and written as ``read_options`` into each test section.
 
     Returns
     -------
@@ -202,7 +213,9 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         s_path = folder / "structure.toml"
         s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
 
-    tests = [_classify(Path(m)) for m in measurements]
+    tests = [_classify(Path(m), read_options) for m in measurements]
+    opts_line = ([f"read_options = {_inline_table(read_options)}   # given to mvtk init"]
+                 if read_options else [])
     impact = next((t for t in tests if t["kind"] == "impact"), None)
     decay = next((t for t in tests if t["kind"] == "decay"), None)
     modal = next((t for t in tests if t["kind"] == "modal"), None)
@@ -237,6 +250,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f'reference = "{impact["reference"]}"',
             f'response = "{impact["response"]}"',
             f"record_s = {impact['record_s']:.6g}   # one record per hit (from the data)",
+            *opts_line,
             "",
         ]
     if decay:
@@ -244,6 +258,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             "[measurements.decay]    # free decay (no force channel)",
             f'file = "{_rel(decay["file"], folder)}"',
             f'channel = "{decay["channel"]}"',
+            *opts_line,
             "",
         ]
     fn = (impact or {}).get("fn_hz") or []
@@ -277,6 +292,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f'file = "{_rel(modal["file"], folder)}"',
             f"fmin_hz = {modal['fmin']:.6g}",
             f"fmax_hz = {modal['fmax']:.6g}",
+            *opts_line,
             "# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m) unless the file has "
             "UFF 15 nodes",
             "",

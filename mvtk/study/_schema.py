@@ -144,6 +144,13 @@ def _freqs(doc, default=REQUIRED) -> Key:
                ascending=True, min_length=0 if default == [] else 1)
 
 
+def _read_options() -> Key:
+    return Key("map", "Reader options passed to mvtk.io.read for this file, for what the "
+               "file does not state, e.g. {units = [\"N\", \"m/s^2\"], quantity = "
+               "[\"force\", \"acceleration\"]} or {fs = 2048.0}; any keyword of "
+               "mvtk.io.read (see the io guide).", {}, value_type="any")
+
+
 _IMPACT = Table(
     "An impact (hammer) test: one record per hit, H1 FRF of response over reference.",
     {"file": Key("path", "Measurement file (any format of mvtk.io.read), relative to the "
@@ -152,7 +159,8 @@ _IMPACT = Table(
      "response": Key("str", "Response channel name.", REQUIRED),
      "record_s": _pos("Length of one record (one hit).", units="s"),
      "force_window_s": _pos("Force window length after the hit (None: no window).",
-                            None, "s")},
+                            None, "s"),
+     "read_options": _read_options()},
 )
 
 _DECAY = Table(
@@ -161,7 +169,8 @@ _DECAY = Table(
      "channel": Key("str", "Channel name of the decay.", REQUIRED),
      "band_hz": Key("numbers", "Band-pass [f_low, f_high] around mode 1 before the fits "
                     "(None: no filter).", None, "Hz", minimum=0.0, exclusive_minimum=True,
-                    ascending=True, length=2)},
+                    ascending=True, length=2),
+     "read_options": _read_options()},
 )
 
 _PARAMETER = Table(
@@ -292,6 +301,7 @@ SCHEMA: dict[str, Table] = {
                               "against the identified shapes.", True),
          "pair_within": _pos("Relative frequency window in which an identified mode is "
                              "attached to an updating target.", 0.03),
+         "read_options": _read_options(),
          }),
     "damping": Table("Damping identification (half-power, envelope, Rayleigh fits).", {
         "fn_hz": _freqs("Approximate resonances searched in the impact test, ascending."),

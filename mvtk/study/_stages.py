@@ -34,7 +34,7 @@ def ingest(study: Study):
     meas = study.section("measurements") or {}
     rows, arrays = [], {}
     for test, path in study.measurement_files.items():
-        ds = mvtk.io.read(path)
+        ds = mvtk.io.read(path, **dict(meas[test].get("read_options") or {}))
         th = ds["time_history"]
         wanted = ([meas[test]["reference"], meas[test]["response"]]
                   if test in ("impact", "broadband") else [meas[test]["channel"]])

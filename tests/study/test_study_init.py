@@ -202,3 +202,44 @@ def test_init_mesh_lists_sets_mixing_surface_and_line_cells(tmp_path, monkeypatc
     assert 'sections = { plate = "plate" }' in text
     assert ("# sets mixing surface and line cells (split them in the mesher to use them): "
             "both (1 quad4, 1 line2)") in text
+
+
+def _strip_units(src: Path, dst: Path) -> Path:
+    """A copy of a CSV export whose header names carry no '[unit]' (as many DAQs write)."""
+    import re
+
+    lines = src.read_text(encoding="utf-8").splitlines()
+    dst.write_text("\n".join(re.sub(r" \[[^\]]*\]", "", ln) if ln[:1].isalpha() else ln
+                             for ln in lines) + "\n", encoding="utf-8")
+    return dst
+
+
+def test_init_and_run_with_reader_options_for_a_file_without_units(tmp_path, capsys):
+    src = _strip_units(DATA / "SYNTHETIC_smart_beam_decay.csv", tmp_path / "decay.csv")
+    # without units the file is listed as unreadable, naming the flag
+    assert main(["init", str(tmp_path / "a"), "--measurements", str(src)]) == 0
+    out = capsys.readouterr().out
+    assert "skipped: not readable" in out and "has no units" in out and "--units" in out
+    # with them it is a decay test, and the study carries the option to its run
+    assert main(["init", str(tmp_path / "b"), "--measurements", str(src), "--units", "m",
+                 "m/s^2"]) == 0
+    assert "decay.csv: decay" in capsys.readouterr().out
+    study = load_study(tmp_path / "b" / "study.toml")
+    assert study.config["measurements"]["decay"]["read_options"] == {"units": ["m", "m/s^2"]}
+    from mvtk.study import run
+
+    res = run(study.path, tmp_path / "b" / "out", stages=["ingest"], progress=False,
+              report=False)
+    assert not res.failed, res.failed
+    ch = res.results["ingest"]["channels"]
+    assert [(c["channel"], c["units"]) for c in ch] == [("tip_disp", "m")]
+
+
+def test_study_read_options_are_validated(tmp_path):
+    _strip_units(DATA / "SYNTHETIC_smart_beam_decay.csv", tmp_path / "decay.csv")
+    (tmp_path / "study.toml").write_text(
+        f'[structure]\nfile = "{STRUCTURE.as_posix()}"\n[measurements.decay]\n'
+        f'file = "decay.csv"\nchannel = "tip_disp"\nread_options = "m"\n', encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"measurements\.decay\.read_options: expected a "
+                       r"table"):
+        load_study(tmp_path / "study.toml")
