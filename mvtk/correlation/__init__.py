@@ -52,6 +52,7 @@ from ._pretest import (
     kinetic_energy_placement,
     placement_quality,
 )
+from ._shapes import read_test_shapes, shapes_at_sensors
 
 __all__ = [
     "CorrelationResult",
@@ -63,6 +64,8 @@ __all__ = [
     "TestGeometry",
     "direction_label",
     "read_test_geometry",
+    "read_test_shapes",
+    "shapes_at_sensors",
     "fe_node_ids",
     "fe_shapes",
     "DofMapping",

@@ -1,8 +1,8 @@
-"""``mvtk correlate GEOMETRY STRUCTURE.toml [--shapes FILE.nc] [--json]``.
+"""``mvtk correlate GEOMETRY STRUCTURE.toml [--shapes FILE] [--json]``.
 
 Maps the sensors of a test geometry onto the FE model of a structure description and
 prints the mapping, the MAC and pairing table and the COMAC per sensor (with test shapes
-in a netCDF file holding a ``("mode", "dof")`` DataArray), or the FE AutoMAC at the
+from a UFF 55 file or a netCDF ``("mode", "dof")`` DataArray), or the FE AutoMAC at the
 sensors (pretest check) without them. The study-level ``mvtk correlate STUDY.toml`` is
 wired by the study package on top of :func:`mvtk.correlation.correlate`.
 """
@@ -26,7 +26,10 @@ def add_parser(subparsers) -> None:
     )
     p.add_argument("geometry", help="test geometry (.uff/.unv, .toml or .csv)")
     p.add_argument("structure", help="structure description (TOML), see mvtk.fe.build_model")
-    p.add_argument("--shapes", help="netCDF file with test shapes (dims mode, dof)")
+    p.add_argument("--shapes", metavar="FILE",
+                   help="measured shapes: UFF 55 (e.g. from mvtk modal --uff-modes or your "
+                   "EMA software; values read along each sensor's axis) or a netCDF "
+                   "DataArray (dims mode, dof)")
     p.add_argument("-n", "--n-modes", type=int, default=10, help="FE modes (default 10)")
     p.add_argument("--method", choices=("shape", "nearest"), default="shape")
     p.add_argument("--tol", type=float, default=None, help="off-model tolerance (m)")
@@ -38,10 +41,10 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk correlate``; errors propagate as MvtkError."""
-    from ..errors import FormatError
     from ..fe import build_model, modal_analysis
     from ._correlate import correlate
     from ._geometry import read_test_geometry
+    from ._shapes import read_test_shapes
 
     geo = read_test_geometry(args.geometry, units_scale=args.units_scale)
     n_default = sum(s.source == "default +z" for s in geo.sensors)
@@ -51,14 +54,7 @@ def run(args: argparse.Namespace) -> int:
                          "direction_source)\n")
     model = build_model(args.structure)
     modal = modal_analysis(model, args.n_modes)
-    test = None
-    if args.shapes:
-        import xarray as xr
-
-        try:
-            test = xr.open_dataarray(args.shapes).load()
-        except (OSError, ValueError) as err:
-            raise FormatError(f"{args.shapes}: cannot read a shapes DataArray ({err})") from err
+    test = read_test_shapes(args.shapes, geo) if args.shapes else None
     res = correlate(geo, model, modal, test, method=args.method, tol=args.tol)
     if args.json:
         sys.stdout.write(json.dumps(res.to_dict()) + "\n")
