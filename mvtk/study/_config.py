@@ -58,11 +58,11 @@ UNCERTAINTY_DISTRIBUTIONS = SCHEMA["uncertainty"].keys["distribution"].choices
 CONTROLLER_TYPES = tuple(CONTROLLER_SCHEMAS)
 
 
-def _file(root: Path, rel: str, where: str) -> Path:
+def _file(root: Path, rel: str, where: str, key: str = "file") -> Path:
     p = (root / rel).resolve()
     if not p.is_file():
         what = "is a directory" if p.is_dir() else "not found"
-        raise ConfigError(f"{where}.file: {rel!r} {what} (looked for {p})")
+        raise ConfigError(f"{where}.{key}: {rel!r} {what} (looked for {p})")
     return p
 
 
@@ -169,7 +169,11 @@ def load_study(path: str | Path) -> Study:
     extra: dict[str, Path] = {}
     if "modal" in cfg:
         mo = cfg["modal"]
-        extra["modal_file"] = _file(root, mo["file"], "modal")
+        if mo.get("file") is not None:
+            extra["modal_file"] = _file(root, mo["file"], "modal")
+        else:
+            for k, name in enumerate(mo["sets"]):
+                extra[f"modal_set_{k + 1}"] = _file(root, name, "modal", f"sets[{k}]")
         if mo.get("geometry") is not None:
             extra["modal_geometry"] = _file(root, mo["geometry"], "modal.geometry")
         if mo["fmax_hz"] <= mo["fmin_hz"]:

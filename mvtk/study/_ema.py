@@ -50,6 +50,38 @@ def _frf_of(path, options=None):
                           f"identify ({err})") from err
 
 
+def _frf_of_sets(paths, options, reference, excitation):
+    """FRF matrix of a roving test's time-history files (one measurement set each).
+
+    Returns ``(frf, note)``; with more references than responses (roving hammer) the
+    matrix is turned by reciprocity (:func:`mvtk.modal.reciprocal`) and ``note`` says so.
+    """
+    import mvtk.io
+    import mvtk.modal
+    from mvtk.errors import MvtkError
+
+    sets = []
+    for k, path in enumerate(paths):
+        ds = mvtk.io.read(path, **options)
+        if "time_history" not in ds:
+            raise ConfigError(f"modal.sets[{k}]: {path.name} holds no time history "
+                              f"(variables {list(ds.data_vars)}); expected force and response "
+                              "channels")
+        sets.append(ds["time_history"])
+    ref = reference if reference is not None else {"quantity": "force"}
+    try:
+        frf = mvtk.modal.frf_matrix(sets, ref, excitation=excitation)
+    except MvtkError as err:
+        names = ", ".join(p.name for p in paths)
+        raise ConfigError(f"modal.sets ({names}): {err}") from err
+    note = ""
+    if frf.sizes["reference"] > frf.sizes["response"]:
+        frf = mvtk.modal.reciprocal(frf)
+        note = (f"roving hammer: {frf.sizes['response']} hammer points x "
+                f"{frf.sizes['reference']} sensor(s), turned by reciprocity (H_ij = H_ji)")
+    return frf, note
+
+
 def modal(study):
     """Identify the multi-point test of ``[modal]`` with :func:`mvtk.modal.identify`.
 
@@ -63,8 +95,16 @@ def modal(study):
     from mvtk.plot import plot_frf_synthesis, plot_stabilisation
 
     cfg = study.section("modal")
-    path = study.extra_file("modal_file")
-    frf = _frf_of(path, dict(cfg.get("read_options") or {}))
+    options = dict(cfg.get("read_options") or {})
+    note = ""
+    if study.has_extra_file("modal_file"):
+        path = study.extra_file("modal_file")
+        frf = _frf_of(path, options)
+        source = path.name
+    else:
+        paths = [study.extra_file(f"modal_set_{k + 1}") for k in range(len(cfg["sets"]))]
+        frf, note = _frf_of_sets(paths, options, cfg.get("reference"), cfg["excitation"])
+        source = f"{len(paths)} measurement sets ({paths[0].name} ... {paths[-1].name})"
     orders = None
     if cfg.get("max_order") is not None:
         orders = range(2, int(cfg["max_order"]) + 1)
@@ -79,7 +119,8 @@ def modal(study):
         "synthesis": _png(plot_frf_synthesis(res)),
     }
     result = {
-        "file": path.name,
+        "file": source,
+        "note": note,
         "n_responses": int(frf.sizes["response"]),
         "n_references": int(frf.sizes["reference"]),
         "n_lines": int(frf.sizes["frequency"]),
@@ -110,8 +151,12 @@ def geometry_of(study, modal_arrays):
     shapes = _shapes(modal_arrays)
     sensors = sorted({(int(n), str(d)) for n, d in zip(shapes["node"].values,
                                                        shapes["direction"].values)})
-    source = (study.extra_file("modal_geometry") if study.has_extra_file("modal_geometry")
-              else study.extra_file("modal_file"))
+    if study.has_extra_file("modal_geometry"):
+        source = study.extra_file("modal_geometry")
+    elif study.has_extra_file("modal_file"):
+        source = study.extra_file("modal_file")
+    else:
+        source = study.extra_file("modal_set_1")
     return read_test_geometry(source, sensors=sensors)
 
 

@@ -571,7 +571,8 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
     sec.text(f"{mod['file']}: {mod['n_responses']} responses x {mod['n_references']} "
              f"reference(s), {mod['n_lines']} lines ({mod['frf_type'] or 'FRF'}), identified "
              f"by pLSCF + LSFD (mvtk.modal) in {mod['band_hz'][0]:g}-{mod['band_hz'][1]:g} "
-             "Hz. A mode marked not reliable says why in its row.")
+             "Hz. A mode marked not reliable says why in its row."
+             + (f" {mod['note'][0].upper()}{mod['note'][1:]}." if mod.get("note") else ""))
     sec.table(pd.DataFrame(mod["table"]), "modal_modes",
               "Identified modes with their quality (MPC, MPD, stable orders)",
               passed_column=None)

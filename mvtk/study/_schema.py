@@ -287,9 +287,24 @@ SCHEMA: dict[str, Table] = {
         "FE modes by MAC in [updating] and are correlated with the (updated) FE model: "
         "MAC, COMAC, and the prediction of the modes that were not updating targets.",
         {"file": Key("path", "FRF file (UFF 58 FRFs with node/direction fields, or any FRF "
-                     "matrix mvtk.io.read returns), relative to the study file.", REQUIRED),
+                     "matrix mvtk.io.read returns), relative to the study file. Give "
+                     "either 'file' or 'sets'.", None),
+         "sets": Key("strings", "Time-history files of a multi-point test, one measurement "
+                     "set per file (roving hammer: the hammer moves, the sensor stays; "
+                     "roving sensor: the reverse), relative to the study file. Their FRFs "
+                     "are estimated (mvtk.modal.frf_matrix: impact, random or sweep "
+                     "detected) and merged by node and direction, so every channel needs a "
+                     "node and a direction (UFF 58 fields, or CSV '# node:' and "
+                     "'# direction:' header lines). With more references than responses "
+                     "(roving hammer) the matrix is turned by reciprocity so that the "
+                     "shapes are read at the hammer points.", None, min_length=1),
+         "reference": Key("str", "Force channel of the sets (None: the channels whose "
+                          "quantity is force).", None),
+         "excitation": Key("str", "Excitation of the sets (auto: detected from the force).",
+                           "auto", choices=("auto", "impact", "random", "sweep")),
          "geometry": Key("path", "Test geometry (UFF 15/2411, CSV or TOML table of node, x, "
-                         "y, z in m; None: the UFF 15 records of 'file').", None),
+                         "y, z in m; None: the UFF 15 records of 'file' or of the first "
+                         "set).", None),
          "fmin_hz": _pos("Lower end of the identification band.", units="Hz"),
          "fmax_hz": _pos("Upper end of the identification band.", units="Hz"),
          "max_order": Key("int", "Highest pLSCF model order (None: mvtk.modal's default).",
@@ -302,7 +317,7 @@ SCHEMA: dict[str, Table] = {
          "pair_within": _pos("Relative frequency window in which an identified mode is "
                              "attached to an updating target.", 0.03),
          "read_options": _read_options(),
-         }),
+         }, one_of=(("file", "sets"),)),
     "damping": Table("Damping identification (half-power, envelope, Rayleigh fits).", {
         "fn_hz": _freqs("Approximate resonances searched in the impact test, ascending."),
         "broadband_fn_hz": _freqs("Resonances searched in the broadband test, ascending "
