@@ -13,7 +13,8 @@ def _init(args: argparse.Namespace) -> int:
     from .study._init import init_study
 
     res = init_study(args.folder, structure=args.structure, measurements=args.measurements,
-                     name=args.name, overwrite=args.force, read_options=reader_options(args))
+                     name=args.name, overwrite=args.force, read_options=reader_options(args),
+                     geometry=args.geometry)
     print(f"wrote {res.study}")
     if args.structure is None:
         print(f"wrote {res.structure} (a placeholder plate: edit it to your structure)")
@@ -34,7 +35,9 @@ def add_parser(subparsers) -> None:
         description="Read the measurement files, recognise the tests they hold (hammer "
         "test, free decay, multi-point FRF set) and write DIR/study.toml with the channels, "
         "record lengths and resonances found, plus DIR/structure.toml (a placeholder) when "
-        "no --structure is given. The study is validated before the command returns.")
+        "no --structure is given. Hammer-test files whose channels carry node numbers and "
+        "differ in hammer or sensor node form a roving test ([modal] sets). The study is "
+        "validated before the command returns.")
     p.add_argument("folder", help="folder to write study.toml (and structure.toml) into")
     p.add_argument("--structure", default=None, metavar="FILE",
                    help="your structure TOML (referenced), or a mesh file (Gmsh .msh, Abaqus "
@@ -42,6 +45,9 @@ def add_parser(subparsers) -> None:
                    "around it, its element sets listed as section and support candidates")
     p.add_argument("--measurements", nargs="*", default=[], metavar="FILE",
                    help="measurement files (any format of mvtk read)")
+    p.add_argument("--geometry", default=None, metavar="FILE",
+                   help="test geometry of a multi-point test (UFF 15/2411, or CSV/TOML of "
+                   "node, x, y, z in m), written as [modal] geometry")
     p.add_argument("--name", default=None, help="study name (default: the folder name)")
     p.add_argument("--force", action="store_true", help="overwrite existing files")
     from .io._cli import add_reader_options

@@ -20,7 +20,7 @@ import warnings
 
 import numpy as np
 
-from ..errors import ConfigError
+from ..errors import ConfigError, MvtkError
 
 __all__ = ["modal", "correlation", "shape_targets", "geometry_of"]
 
@@ -157,7 +157,15 @@ def geometry_of(study, modal_arrays):
         source = study.extra_file("modal_file")
     else:
         source = study.extra_file("modal_set_1")
-    return read_test_geometry(source, sensors=sensors)
+    try:
+        return read_test_geometry(source, sensors=sensors)
+    except MvtkError as err:
+        if study.has_extra_file("modal_geometry"):
+            raise
+        raise ConfigError(
+            f"modal.geometry: not given, and {source.name} holds no test geometry ({err}); "
+            "expected geometry = \"<file>\" in [modal]: UFF 15/2411, or a CSV/TOML table of "
+            "node, x, y, z in m with the nodes of the measurement") from err
 
 
 def _mapping(study, modal_arrays, model):

@@ -129,6 +129,13 @@ def _classify(path: Path, options: dict | None = None) -> dict:
             return out
         res_hz = float(res.attrs.get("resolution_hz", np.nan))
         fs = 1.0 / float(th["time"].values[1] - th["time"].values[0])
+        if "node" in th.coords:  # node numbers: a candidate set of a roving test
+            nodes = [int(n) for n in th["node"].values]
+            if all(n >= 0 for n in nodes):
+                band = res.attrs.get("excitation_band_hz") or [0.0, fs / 2]
+                out["nodes"] = (int(th["node"].sel(channel=forces[0])),
+                                int(th["node"].sel(channel=others[0])))
+                out["band_hz"] = (float(band[0]), float(min(band[1], fs / 2)))
         out["record_s"] = float(1.0 / res_hz) if np.isfinite(res_hz) and res_hz > 0 else float(
             th.sizes["time"] / fs)
         try:
@@ -145,13 +152,27 @@ def _classify(path: Path, options: dict | None = None) -> dict:
     return {"file": path, "kind": "skipped", "why": "only force channels"}
 
 
+def _roving_sets(tests: list[dict]) -> list[dict]:
+    """The impact files that form one roving test (hammer or sensor moves between sets).
+
+    At least two hammer-test files whose force and response channels carry node
+    numbers, and whose (hammer node, sensor node) pairs differ: a roving hammer (the
+    hammer node changes) or a roving sensor. Empty otherwise.
+    """
+    cand = [t for t in tests if t["kind"] == "impact" and "nodes" in t]
+    if len(cand) < 2 or len({t["nodes"] for t in cand}) != len(cand):
+        return []
+    return cand
+
+
 def _fmt_list(values) -> str:
     return "[" + ", ".join(f"{v:.6g}" for v in values) + "]"
 
 
 def init_study(folder: str | Path, *, structure: str | Path | None = None,
                measurements=(), name: str | None = None, overwrite: bool = False,
-               read_options: dict | None = None) -> InitResult:
+               read_options: dict | None = None, geometry: str | Path | None = None
+               ) -> InitResult:
     """Write ``folder/study.toml`` (and ``folder/structure.toml`` without ``structure``).
 
     Parameters
@@ -175,6 +196,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         Reader options (:func:`mvtk.io.read` keywords, e.g. ``units``, ``quantity``,
         ``fs``) for files that do not state them; used to read every measurement file
         and written as ``read_options`` into each test section.
+    geometry : path, optional
+        Test geometry of a multi-point test (UFF 15/2411, or a CSV/TOML table of node,
+        x, y, z in m), written as ``[modal] geometry``; without it the line is left
+        commented (a UFF FRF file usually holds its geometry, CSV sets do not).
 
     Returns
     -------
@@ -201,6 +226,8 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     for m in measurements:
         if not Path(m).is_file():
             raise ConfigError(f"mvtk init: measurement file {str(m)!r} not found")
+    if geometry is not None and not Path(geometry).is_file():
+        raise ConfigError(f"mvtk init: geometry file {str(geometry)!r} not found")
     if structure is not None:
         s_path = Path(structure)
         if not s_path.is_file():
@@ -219,8 +246,18 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     impact = next((t for t in tests if t["kind"] == "impact"), None)
     decay = next((t for t in tests if t["kind"] == "decay"), None)
     modal = next((t for t in tests if t["kind"] == "modal"), None)
+    def geometry_line(commented: str) -> list[str]:
+        if geometry is None:
+            return [commented]
+        return [f'geometry = "{_rel(Path(geometry), folder)}"']
+
+    roving = _roving_sets(tests) if modal is None else []
+    for t in roving:
+        t["kind"] = "impact" if t is impact else "roving set"
+        t["roving"] = True
     for t in tests:
-        if t["kind"] != "skipped" and t is not impact and t is not decay and t is not modal:
+        if t["kind"] != "skipped" and t is not impact and t is not decay and t is not modal \
+                and not t.get("roving"):
             t.update(kind="skipped", why=f"a second {t['kind']} test: add it by hand")
 
     lines = [
@@ -293,8 +330,26 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"fmin_hz = {modal['fmin']:.6g}",
             f"fmax_hz = {modal['fmax']:.6g}",
             *opts_line,
-            "# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m) unless the file has "
-            "UFF 15 nodes",
+*geometry_line(
+                "# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m) unless the file "
+                "has UFF 15 nodes"),
+            "",
+        ]
+    if roving:
+        lo = max(max(t["band_hz"][0] for t in roving), 0.0)
+        hi = 0.95 * min(t["band_hz"][1] for t in roving)
+        sets = ", ".join(f'"{_rel(t["file"], folder)}"' for t in roving)
+        kind = ("roving hammer" if len({t["nodes"][0] for t in roving}) > 1
+                else "roving sensor")
+        lines += [
+            f"[modal]                 # {kind} test: {len(roving)} sets with node numbers "
+            "(mvtk.modal)",
+            f"sets = [{sets}]",
+            f"fmin_hz = {max(lo, 0.02 * hi):.6g}",
+            f"fmax_hz = {hi:.6g}   # EDIT: the band of your modes",
+*geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
+                           "needed to correlate with the FE model"),
+            *opts_line,
             "",
         ]
     study_path.write_text("\n".join(lines), encoding="utf-8")

@@ -110,3 +110,44 @@ def test_modal_needs_file_or_sets(tmp_path):
     p = _study(tmp_path, ["missing.csv"])
     with pytest.raises(ConfigError, match=r"modal\.sets\[0\]: 'missing\.csv' not found"):
         load_study(p)
+
+
+@pytest.mark.slow
+def test_init_recognises_a_roving_hammer_test(tmp_path, capsys):
+    from mvtk.cli import main
+
+    _write_sets(tmp_path, np.random.default_rng(3))
+    hits = sorted(str(p) for p in tmp_path.glob("hit_node*.csv"))
+    assert main(["init", str(tmp_path / "s"), "--measurements", *hits,
+                 "--geometry", str(tmp_path / "geometry.csv")]) == 0
+    out = capsys.readouterr().out
+    assert out.count("roving set") == 3 and "hit_node1.csv: impact" in out
+    study = load_study(tmp_path / "s" / "study.toml")
+    mo = study.config["modal"]
+    assert [Path(s).name for s in mo["sets"]] == [Path(h).name for h in hits]
+    assert mo["geometry"].endswith("geometry.csv") and mo["fmax_hz"] > 95.0
+    res = run(study.path, tmp_path / "s" / "out", stages=["modal"], progress=False,
+              report=False)
+    assert not res.failed, res.failed
+    assert len(res.results["modal"]["table"]["fn_hz"]) == 4
+
+
+def test_missing_geometry_of_csv_sets_is_a_clear_refusal(tmp_path):
+    from mvtk.study._ema import geometry_of
+
+    class _Study:  # the two methods geometry_of uses
+        def has_extra_file(self, name):
+            return False
+
+        def extra_file(self, name):
+            return tmp_path / "hit_node1.csv"
+
+    (tmp_path / "hit_node1.csv").write_text("time [s],hammer [N]\n0,1\n", encoding="utf-8")
+    import xarray as xr
+
+    shapes = xr.DataArray(np.ones((1, 1)), dims=("mode", "dof"),
+                          coords={"dof": ["1+z"], "node": ("dof", [1]),
+                                  "direction": ("dof", ["+z"])})
+    with pytest.raises(ConfigError, match=r"modal\.geometry: not given, and hit_node1\.csv "
+                       r"holds no test geometry .*expected geometry = "):
+        geometry_of(_Study(), {"shapes": shapes})
