@@ -253,7 +253,11 @@ def identify(
         mode whose own FRF is < 10 % of the measured ``|H|`` at its frequency, a
         measured vs synthesised correlation < 0.8 within ``fn +- max(5 lines, 2 zeta
         fn)`` (poles fitted to noise), a
-        half-power bandwidth ``2 zeta fn`` narrower than the line spacing), complex
+        half-power bandwidth ``2 zeta fn`` narrower than the line spacing, a mode the
+        force hardly excited: ``excitation_db``, the reference autospectrum at ``fn`` re
+        its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
+        -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
+        coordinate, e.g. UFF 58 FRFs), complex
         and real shapes at the response DOFs (mass-normalised when a driving point
         exists), synthesised FRFs and their correlation with the measured ones.
 
