@@ -24,6 +24,10 @@ _KIND_OF_QUANTITY = {"displacement": "receptance", "velocity": "mobility",
                      "acceleration": "accelerance"}
 _DIR_RE = re.compile(r"^([+-]?)(x|y|z|rx|ry|rz)$")
 _DIMS = ("response", "reference", "frequency")
+#: coordinates of measured FRF matrices kept by :func:`as_frf_matrix`: the coherence
+#: ``(response, reference, frequency)`` and the excitation level in dB of each
+#: reference ``(reference, frequency)`` (from :func:`frf_matrix`).
+_CARRIED = ("coherence", "reference_level_db")
 
 
 def _direction(value) -> str:
@@ -118,7 +122,10 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
         ascending; ``attrs["frf_type"]`` (from the argument, the object's attrs, the
         channel quantities or the ordinate units such as ``m/s^2/N``, in that order).
         Node labels such as ``"12:z"`` written by the UFF reader are parsed into
-        ``node=12, direction="+z"``; unknown nodes are -1.
+        ``node=12, direction="+z"``; unknown nodes are -1. A ``coherence``
+        ``(response, reference, frequency)`` and a ``reference_level_db``
+        ``(reference, frequency)`` coordinate (or data variable of a Dataset, as
+        :func:`mvtk.signal.frf` returns) are kept.
 
     Raises
     ------
@@ -210,6 +217,14 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
         },
         name="frf",
     )
+    # measurement evidence that follows the FRFs through band selection and conversion
+    for name in _CARRIED:
+        c = da.coords.get(name)
+        if c is None and isinstance(obj, xr.Dataset) and name in obj.data_vars:
+            c = obj[name]
+        if c is not None and set(c.dims) <= set(_DIMS) and "frequency" in c.dims:
+            order = [d for d in _DIMS if d in c.dims]
+            out = out.assign_coords({name: c.transpose(*order).variable})
     keep = {k: v for k, v in attrs.items() if isinstance(v, (str, int, float))}
     keep.pop("kind", None)
     out.attrs = {**keep, "frf_type": kind}
@@ -321,7 +336,9 @@ def _one_set(x, reference, response, kwargs, index):
             "reference_units": ("reference", [str(v) for v in per(fn, "units", "")]),
         },
     )
-    return h, ds["coherence"].values, ds.attrs
+    level = (ds["reference_level_db"].values if "reference_level_db" in ds.data_vars
+             else np.full((len(fn), ds.sizes["frequency"]), np.nan))
+    return h, ds["coherence"].values, ds.attrs, level
 
 
 def _key(node, direction, name):
@@ -371,8 +388,11 @@ def frf_matrix(
     xarray.DataArray
         Complex FRFs ``("response", "reference", "frequency")`` (see
         :func:`as_frf_matrix`) with a ``coherence`` coordinate of the same dims (NaN for
-        pairs that were not measured) and ``attrs`` ``estimator``, ``n_averages`` (sum
-        over sets), ``n_sets``.
+        pairs that were not measured), a ``reference_level_db`` coordinate
+        ``("reference", "frequency")`` (each reference's autospectrum in dB re its
+        largest value above 0 Hz, averaged over the sets that share the reference: how
+        strongly each line was excited; :func:`identify` marks modes it missed) and
+        ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``.
 
     Raises
     ------
@@ -395,7 +415,7 @@ def frf_matrix(
     f0 = parts[0][0]["frequency"].values
     rkeys: dict = {}
     fkeys: dict = {}
-    for k, (h, _, _) in enumerate(parts):
+    for k, (h, _, _, _) in enumerate(parts):
         f = h["frequency"].values
         if f.shape != f0.shape or not np.allclose(f, f0):
             raise DimensionError(
@@ -413,9 +433,11 @@ def frf_matrix(
     acc = np.zeros((nr, nf, f0.size), complex)
     coh = np.zeros((nr, nf, f0.size))
     wsum = np.zeros((nr, nf))
+    power = np.zeros((nf, f0.size))      # reference autospectrum re its maximum, linear
+    psum = np.zeros(nf)
     rlist, flist = list(rkeys), list(fkeys)
     n_avg = 0
-    for h, c, attrs in parts:
+    for h, c, attrs, level in parts:
         w = float(attrs.get("n_averages", 1))
         n_avg += int(attrs.get("n_averages", 1))
         ri = [rlist.index(_key(h["node"].values[i], h["direction"].values[i],
@@ -424,6 +446,8 @@ def frf_matrix(
                                h["reference_direction"].values[j], h["reference"].values[j]))
               for j in range(h.sizes["reference"])]
         acc[np.ix_(ri, fi)] += w * h.values
+        power[fi] += w * 10 ** (level / 10)
+        psum[fi] += w
         coh[np.ix_(ri, fi)] += w * c
         wsum[np.ix_(ri, fi)] += w
     missing = np.argwhere(wsum == 0)
@@ -470,7 +494,11 @@ def frf_matrix(
     )
     a0 = parts[0][2]
     out = as_frf_matrix(da)
-    out = out.assign_coords(coherence=(_DIMS, np.clip(coh, 0, 1)))
+    with np.errstate(divide="ignore"):
+        level = 10 * np.log10(power / psum[:, None])
+    out = out.assign_coords(coherence=(_DIMS, np.clip(coh, 0, 1)),
+                            reference_level_db=(("reference", "frequency"), level,
+                                                {"units": "dB"}))
     out.attrs.update(estimator=estimator, excitation=kinds[0], n_averages=n_avg,
                      n_sets=len(parts), window=str(a0.get("window", "")),
                      df_hz=float(f0[1] - f0[0]))

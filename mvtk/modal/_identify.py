@@ -17,7 +17,8 @@ from ._stabilisation import (
     select_poles,
 )
 
-__all__ = ["identify", "dof_labels", "shapes_array", "count_peaks", "default_orders"]
+__all__ = ["identify", "dof_labels", "shapes_array", "count_peaks", "default_orders",
+           "excitation_level"]
 
 PEAK_PROMINENCE_DB = 6.0
 """A peak of the smoothed sum-FRF counts when it stands this far above its surroundings."""
@@ -125,10 +126,49 @@ def _driving_point(h):
 MIN_SUPPORT = 2.0
 """A mode must at least halve the LSFD misfit within ``fn +- max(5 lines, 2 zeta fn)``."""
 
+WEAK_EXCITATION_DB = {"impact": -35.0, "sweep": -50.0, "random": -50.0}
+"""A mode is weakly excited when the reference autospectrum at its frequency (best
+reference) is this far below its maximum in the band, by excitation type (chosen from
+the real files, see ``docs/guide/modal.md``): a hammer's force rolls off with frequency
+and what lies 35 dB down is excited by little more than noise (acceleration.lvm: the
+catalogued 8747.5 Hz mode at -31 dB, the noise poles above 10 kHz at -35..-44 dB); a
+shaker's force dips at resonances (drop-out: the view_0 sweep has its catalogued
+350 Hz mode at -37 dB) and only falls below -50 dB outside the swept band."""
+
+
+def excitation_level(h, fn_hz) -> np.ndarray:
+    """Level of the excitation at each frequency in dB re its maximum in the band.
+
+    From the ``reference_level_db`` coordinate ``("reference", "frequency")`` that
+    :func:`frf_matrix` attaches (reference autospectrum per line): for each reference
+    the level at the line nearest ``fn`` minus its largest value in the band (lines
+    above 0 Hz), the best reference taken. NaN when the FRF matrix carries no
+    excitation level (FRFs read from UFF 58 or other files without the force).
+    """
+    fn_hz = np.asarray(fn_hz, dtype=float)
+    out = np.full(fn_hz.size, np.nan)
+    lev = h.coords.get("reference_level_db")
+    if lev is None or fn_hz.size == 0:
+        return out
+    f = h["frequency"].values
+    L = np.asarray(lev.transpose("reference", "frequency").values, dtype=float)
+    top = np.max(np.where(np.isfinite(L) & (f > 0)[None, :], L, -np.inf), axis=1)
+    ok = np.isfinite(top)
+    if not ok.any():
+        return out
+    rel = L[ok] - top[ok, None]
+    k = np.abs(f[None, :] - fn_hz[:, None]).argmin(axis=1)
+    vals = rel[:, k]                                   # (reference, mode)
+    with np.errstate(invalid="ignore"):
+        best = np.where(np.isfinite(vals), vals, -np.inf).max(axis=0)
+    out[np.isfinite(best)] = best[np.isfinite(best)]
+    return out
+
 
 def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None,
                   contribution=None, min_contribution=0.1, local=None, min_local=0.8,
-                  support=None, min_support=MIN_SUPPORT, half_hz=None):
+                  support=None, min_support=MIN_SUPPORT, half_hz=None,
+                  excitation_db=None, min_excitation_db=None, excitation_name="force"):
     """``reliable`` and ``reason`` per mode from the stated criteria."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
@@ -136,9 +176,14 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     local = nan if local is None else local
     support = nan if support is None else support
     half_hz = nan if half_hz is None else half_hz
-    for f, z, m, c, q, loc, sup, hw in zip(fn, zeta, mpc_v, count, contribution, local,
-                                           support, half_hz):
+    excitation_db = nan if excitation_db is None else excitation_db
+    for f, z, m, c, q, loc, sup, hw, ex in zip(fn, zeta, mpc_v, count, contribution, local,
+                                               support, half_hz, excitation_db):
         why = []
+        if (min_excitation_db is not None and np.isfinite(ex)
+                and ex < min_excitation_db):
+            why.append(f"weakly excited: {excitation_name} {ex:.0f} dB re its maximum in "
+                       f"the band (< {min_excitation_db:g} dB)")
         if np.isfinite(sup) and sup < min_support:
             why.append(f"not needed by the data: LSFD misfit within +-{hw:.3g} Hz without/"
                        f"with the mode {sup:.2f} (< {min_support:g})")
@@ -208,7 +253,11 @@ def identify(
         mode whose own FRF is < 10 % of the measured ``|H|`` at its frequency, a
         measured vs synthesised correlation < 0.8 within ``fn +- max(5 lines, 2 zeta
         fn)`` (poles fitted to noise), a
-        half-power bandwidth ``2 zeta fn`` narrower than the line spacing), complex
+        half-power bandwidth ``2 zeta fn`` narrower than the line spacing, a mode the
+        force hardly excited: ``excitation_db``, the reference autospectrum at ``fn`` re
+        its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
+        -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
+        coordinate, e.g. UFF 58 FRFs), complex
         and real shapes at the response DOFs (mass-normalised when a driving point
         exists), synthesised FRFs and their correlation with the measured ones.
 
@@ -330,14 +379,21 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     df = float(np.median(np.diff(f)))
     contrib = _contribution(fit, h)
     local = _local_correlation(h.values, syn_v, windows)
+    exc_db = excitation_level(h, fn)
+    kind = str(h.attrs.get("excitation", ""))
+    rq = {str(q) for q in h["reference_quantity"].values}
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
                                      stab.zeta_max, df_hz=df, contribution=contrib,
-                                     local=local, support=support, half_hz=half)
+                                     local=local, support=support, half_hz=half,
+                                     excitation_db=exc_db,
+                                     min_excitation_db=WEAK_EXCITATION_DB.get(kind),
+                                     excitation_name="force" if rq == {"force"}
+                                     else "excitation")
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
         stability_count=sel.count, reliable=reliable, reason=reason, frf=h,
         synthesised=syn, correlation=corr, residue=fit.residue,
         lower_residual=fit.lower, upper_residual=fit.upper, diagram=diagram,
-        support=support,
+        support=support, excitation_db=exc_db,
     )

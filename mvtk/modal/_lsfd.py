@@ -56,8 +56,9 @@ def synthesise(fit: LsfdFit, f_hz) -> np.ndarray:
         basis[nm:2 * nm] = 1.0 / (iw[None, :] - np.conj(fit.pole)[:, None])
         basis[-2] = 1.0 / iw**2
         basis[-1] = 1.0
-        coef = np.concatenate([fit.residue.reshape(nm, -1).T,
-                               np.conj(fit.residue).reshape(nm, -1).T,
+        nfrf = int(np.prod(shape))
+        coef = np.concatenate([fit.residue.reshape(nm, nfrf).T,
+                               np.conj(fit.residue).reshape(nm, nfrf).T,
                                fit.lower.reshape(-1, 1), fit.upper.reshape(-1, 1)], axis=1)
         out = (coef.astype(complex) @ basis) * iw**fit.power
     return out.reshape(shape + (w.size,))

@@ -2,14 +2,12 @@
 
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
-
 import numpy as np
 import scipy.linalg
 
 from ..errors import ParameterError, ResolutionWarning
 from ._frf import as_frf_matrix
+from ._polyroots import roots_by_order
 from ._quality import cmif
 from ._stabilisation import StabilisationDiagram, StabilityCriteria, poles_to_diagram
 
@@ -156,20 +154,12 @@ def plscf(
             alpha = -np.linalg.solve(m11, m12)
         except np.linalg.LinAlgError:
             alpha = -np.linalg.lstsq(m11, m12, rcond=None)[0]
-        comp = np.zeros((p * ni, p * ni))
-        if p > 1:
-            comp[:-ni, ni:] = np.eye((p - 1) * ni)
-        blocks = alpha.reshape(p, ni, ni)
-        comp[-ni:, :] = -np.concatenate([b.T for b in blocks], axis=1)
-        comps.append((p, blocks, comp))
-    # the eigenvalue problems of the orders are independent: LAPACK releases the GIL, so
-    # they run on the available cores
-    workers = max(1, min(4, os.cpu_count() or 1, len(comps)))
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        mus = list(pool.map(
-            lambda c: scipy.linalg.eigvals(c[2], overwrite_a=True, check_finite=False), comps))
+        comps.append((p, alpha.reshape(p, ni, ni)))
+    # roots of det D(z): each order's Ehrlich-Aberth iteration starts from the roots of
+    # the order before (companion eigenvalues for small orders or when it fails)
+    mus = roots_by_order([blocks.transpose(0, 2, 1) for _, blocks in comps])
     per_order = []
-    for (p, blocks, _), mu in zip(comps, mus):
+    for (p, blocks), mu in zip(comps, mus):
         mu = mu[mu.imag > 0]  # one of each conjugate pair (real poles are not modes)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             lam = np.log(mu) / dt

@@ -60,6 +60,12 @@ class IdentifiedModes:
         ``sum |H - H_fit|^2`` within ``fn +- max(5 lines, 2 zeta fn)`` of a fit without
         the mode divided by that of the full fit (``inf`` for an exact fit). Below 2
         the mode is marked not reliable. ``None`` (SSI-cov: no FRFs).
+    excitation_db : numpy.ndarray or None
+        Level of the excitation (reference autospectrum, best reference) at each mode's
+        frequency in dB re its maximum in the band; NaN when the FRFs carry no
+        excitation level (UFF 58 and other FRF files). Below the threshold of the
+        excitation type (``mvtk.modal._identify.WEAK_EXCITATION_DB``: impact -35 dB,
+        sweep and random -50 dB) the mode is marked not reliable ("weakly excited").
     """
 
     method: str
@@ -82,6 +88,7 @@ class IdentifiedModes:
     upper_residual: np.ndarray | None
     diagram: StabilisationDiagram
     support: np.ndarray | None = None
+    excitation_db: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -89,14 +96,18 @@ class IdentifiedModes:
         return int(self.fn_hz.size)
 
     def to_dataframe(self) -> pd.DataFrame:
-        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support reliable
-        reason`` (``support`` NaN where it does not apply, e.g. SSI-cov)."""
+        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support
+        excitation_db reliable reason`` (``support``, ``excitation_db`` NaN where they
+        do not apply, e.g. SSI-cov, FRFs without the force)."""
         support = (np.full(self.n_modes, np.nan) if self.support is None
                    else np.asarray(self.support, dtype=float))
+        exc = (np.full(self.n_modes, np.nan) if self.excitation_db is None
+               else np.asarray(self.excitation_db, dtype=float))
         return pd.DataFrame({
             "mode": np.arange(1, self.n_modes + 1),
             "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
             "stability_count": self.stability_count, "support": support,
+            "excitation_db": exc,
             "reliable": self.reliable, "reason": list(self.reason),
         })
 

@@ -125,3 +125,30 @@ def test_adopts_uff_labels_and_per_channel_spectra():
     with pytest.raises(DimensionError, match="found variables"):
         modal.as_frf_matrix(xr.Dataset({"psd": (("channel", "frequency"), np.ones((2, 11)))},
                                        coords={"frequency": f}))
+
+
+def test_reference_level_is_the_force_autospectrum(msys, rng):
+    # the level per line is the force's own periodogram (rectangular window, summed over
+    # the segments) in dB re its largest value above 0 Hz, one row per reference
+    th, *_ = _records(msys, rng, refs=[0, 2], resp=[1, 3])
+    h = modal.frf_matrix(th, {"quantity": "force"}, **_kw())
+    force = th.values[:2].reshape(2, -1, NSEG)
+    p = np.sum(np.abs(np.fft.rfft(force, axis=-1)) ** 2, axis=1)
+    want = 10 * np.log10(p / p[:, 1:].max(axis=1, keepdims=True))
+    lev = h["reference_level_db"]
+    assert lev.dims == ("reference", "frequency")
+    np.testing.assert_allclose(lev.values[:, 1:-1], want[:, 1:-1], atol=1e-9)
+    # carried through band selection and conversion (identify works on the band)
+    from mvtk.modal._plscf import band_frf
+
+    b = band_frf(modal.convert_frf(h, "accelerance"), 10, 100)
+    np.testing.assert_array_equal(b["reference_level_db"].values,
+                                  lev.sel(frequency=b["frequency"]).values)
+    # two sets sharing the hammer position: the linear levels are averaged
+    a, *_ = _records(msys, rng, refs=[0], resp=[1])
+    c, *_ = _records(msys, rng, refs=[0], resp=[2])
+    hm = modal.frf_matrix([a, c], {"quantity": "force"}, **_kw())
+    la = modal.frf_matrix(a, {"quantity": "force"}, **_kw())["reference_level_db"].values
+    lc = modal.frf_matrix(c, {"quantity": "force"}, **_kw())["reference_level_db"].values
+    np.testing.assert_allclose(hm["reference_level_db"].values,
+                               10 * np.log10((10 ** (la / 10) + 10 ** (lc / 10)) / 2))

@@ -119,7 +119,7 @@ def test_poles_near_given_frequencies_and_tables(msys):
     assert abs(res.fn_hz[0] - 100.0) < 1e-6 or abs(res.fn_hz[0] - 100.5) < 1e-6
     df = res.to_dataframe()
     assert list(df.columns) == ["mode", "fn_hz", "zeta", "mpc", "mpd", "stability_count",
-                                "support", "reliable", "reason"]
+                                "support", "excitation_db", "reliable", "reason"]
     assert res.shapes.dims == ("mode", "dof")
     assert list(res.shapes["dof"].values[:2]) == ["1+z", "2+z"]
     assert res.shapes["node"].values.tolist() == list(range(1, 9))
@@ -183,3 +183,47 @@ def test_pure_noise_gives_no_reliable_mode(rng):
     res = modal.identify(h, 10, 390)
     assert not res.reliable.any(), res.to_dataframe()
     assert res.shapes.shape == (res.n_modes, 2)
+
+
+def test_no_stable_pole_gives_an_empty_table(msys):
+    # orders 1..4 of a 6-mode system: nothing is stable often enough; an empty table,
+    # not a failure in the synthesis
+    M, C, K = msys.chain(6)
+    w2, phi = np.linalg.eigh(K)
+    fn = np.sqrt(w2) / (2 * np.pi)
+    h = msys.modal_frf(fn, np.full(6, 0.01), phi.T, np.linspace(1, 1.2 * fn[-1], 800), [0])
+    res = modal.identify(h, orders=range(1, 3))
+    assert res.n_modes == 0 and res.to_dataframe().empty
+    assert res.synthesised.shape == h.shape
+
+
+def test_weakly_excited_modes_are_flagged(msys):
+    # six modes; a force level that falls 60 dB up to the last mode: the table
+    # gives the level at each mode and flags those below the threshold of the
+    # excitation type (impact -35 dB, sweep -50 dB); no level on the FRFs: NaN, no flag
+    M, C, K = msys.chain(6)
+    w2, phi = np.linalg.eigh(K)
+    fn = np.sqrt(w2) / (2 * np.pi)
+    f = np.linspace(1, 1.15 * fn[-1], 2000)
+    h = msys.modal_frf(fn, np.full(6, 0.01), phi.T, f, [0])
+    def level_at(x):
+        return 3.0 - 60.0 * x / fn[-1]
+
+    level = level_at(f)
+    h = h.assign_coords(reference_level_db=(("reference", "frequency"), level[None, :]))
+    plain = modal.identify(h.drop_vars("reference_level_db"), 0.5 * fn[0], 1.1 * fn[-1])
+    assert np.isnan(plain.excitation_db).all() and plain.reliable.all()
+    for kind, limit in (("impact", -35.0), ("sweep", -50.0)):
+        h.attrs["excitation"] = kind
+        res = modal.identify(h, 0.5 * fn[0], 1.1 * fn[-1])
+        assert res.n_modes == 6
+        # re the band's maximum (at its first line)
+        band_top = level_at(f[f >= 0.5 * fn[0]][0])
+        np.testing.assert_allclose(res.excitation_db, level_at(res.fn_hz) - band_top,
+                                   atol=0.1)
+        weak = res.excitation_db < limit
+        assert weak.any() and not weak.all(), res.excitation_db
+        assert np.array_equal(~res.reliable, weak), res.to_dataframe()
+        for i in np.flatnonzero(weak):
+            assert f"weakly excited: force {res.excitation_db[i]:.0f} dB" in res.reason[i]
+        assert "excitation_db" in res.to_dataframe().columns

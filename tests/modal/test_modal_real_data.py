@@ -54,6 +54,9 @@ def test_free_free_beam_accelerances(modal_data):
     k = _near(res, 901.0, 1e-3)
     assert res.reliable[k] and 2 < res.support[k] < 20, res.to_dataframe()
     assert res.correlation.attrs["overall"] > 0.99
+    # UFF 58 FRFs carry no force: no excitation level, nothing flagged for it
+    assert np.isnan(res.excitation_db).all()
+    assert not any("weakly excited" in r for r in res.reason)
 
 
 def _mat_frf(path):
@@ -96,6 +99,12 @@ def test_swept_sine_plate_h1(modal_data):
     for f0 in (77, 127, 265, 350):         # PROVENANCE.md H1 peaks
         k = _near(res, f0, 0.02)
         assert res.reliable[k] and res.support[k] > 4
+    # the shaker's force drops out at the plate's resonances: 127 and 350 Hz lie 34..37
+    # dB below the force's maximum in the band and stay reliable (sweep limit -50 dB)
+    assert h.attrs["excitation"] == "sweep"
+    k = _near(res, 127, 0.02)
+    assert -40 < res.excitation_db[k] < -30
+    assert np.all(res.excitation_db > -50) and np.all(res.excitation_db <= 0)
     assert np.any((res.fn_hz > 440) & (res.fn_hz < 470))
 
 
@@ -112,3 +121,22 @@ def test_lvm_hammer_test_modes_supported(modal_data):
         assert res.reliable[k] and res.support[k] > 100, res.to_dataframe()
         if z0 is not None:
             assert abs(res.zeta[k] / z0 - 1) < 0.2, (f0, res.zeta[k])
+
+
+@pytest.mark.slow
+def test_lvm_hammer_test_weak_force_above_10_khz(modal_data):
+    """Defaults (whole 0..25 kHz band): above 10 kHz the hammer's force is 37..54 dB below
+    its low-frequency level and every pole there is marked weakly excited; the six
+    catalogued modes (8747.5 Hz at -31 dB) stay reliable."""
+    ds = io.read(modal_data / "lvm" / "acceleration.lvm")
+    h = modal.frf_matrix([ds], {"quantity": "force"})
+    assert h.attrs["excitation"] == "impact"
+    res = modal.identify(h)
+    for f0 in (695.8, 1898.1, 2779.7, 3670.8, 5975.0, 8747.5):
+        k = _near(res, f0, 2e-3)
+        assert res.reliable[k] and res.excitation_db[k] > -35, res.to_dataframe()
+    high = res.fn_hz > 10000
+    assert high.sum() >= 5
+    assert not res.reliable[high].any()
+    assert all("weakly excited: force" in res.reason[i] for i in np.flatnonzero(high))
+    assert np.all(res.excitation_db[high] < -35)
