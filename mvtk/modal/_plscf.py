@@ -31,10 +31,30 @@ def band_frf(frf, fmin: float | None, fmax: float | None):
     return h.isel(frequency=np.flatnonzero(keep))
 
 
-def _lag_sums(zk, a):
-    """``sum_f z_f^k a_f`` for lags ``k = -P..P`` (rows), columns of ``a``."""
-    pos = zk.T @ a
-    neg = np.conj(zk).T @ a
+#: Frequency lines per block of the lag sums: the block's ``z^k`` table is
+#: ``_LAG_BLOCK x (P + 1)`` complex numbers (21 MB at P = 160), whatever the band's length.
+_LAG_BLOCK = 8192
+
+
+def _lag_sums(phase, P, a):
+    """``sum_f z_f^k a_f`` for lags ``k = -P..P`` (rows), columns of ``a``.
+
+    ``z_f = exp(i phase_f)``. The powers are built block by block over the frequency
+    lines, so the memory stays bounded for long records (a 262 144-line band at
+    ``P = 160`` would need a 675 MB table at once).
+    """
+    pos = np.zeros((P + 1, a.shape[1]), dtype=complex)
+    neg = np.zeros_like(pos)
+    for start in range(0, len(phase), _LAG_BLOCK):
+        blk = slice(start, start + _LAG_BLOCK)
+        # z^k by running products (one complex multiply per entry; as accurate as
+        # numpy's integer powers here, and 4x faster than exp(i k phase))
+        zk = np.empty((len(phase[blk]), P + 1), dtype=complex)
+        zk[:, 0] = 1.0
+        zk[:, 1:] = np.exp(1j * phase[blk])[:, None]
+        np.cumprod(zk, axis=1, out=zk)
+        pos += zk.T @ a[blk]
+        neg += np.conj(zk).T @ a[blk]
     return np.concatenate([neg[:0:-1], pos], axis=0)
 
 
@@ -118,17 +138,19 @@ def plscf(
     scale = np.sqrt(np.mean(np.abs(H) ** 2))
     Hs = H / (scale if scale > 0 else 1.0)
     dt = 1.0 / (2.0 * f[-1])
-    z = np.exp(1j * 2 * np.pi * f * dt)
-    zk = z[:, None] ** np.arange(P + 1)[None, :]  # (nf, P+1)
-    # lag sums: rho (R), sigma (S_o), tau (sum_o T_o)
-    rho = _lag_sums(zk, np.ones((nf, 1)))[:, :, None]                      # (2P+1, 1, 1)
-    sig = _lag_sums(zk, Hs.reshape(no * ni, nf).T)                         # (2P+1, no*ni)
+    phase = 2 * np.pi * f * dt  # z_f = exp(i phase_f)
+    # lag sums of rho (R), sigma (S_o) and tau (sum_o T_o), in one pass over the lines
     q = np.empty((nf, ni, ni), complex)
     for i in range(ni):
         for j in range(ni):
             q[:, i, j] = np.sum(np.conj(Hs[:, i]) * Hs[:, j], axis=0)
-    q = q.reshape(nf, ni * ni)
-    tau = _lag_sums(zk, q).reshape(2 * P + 1, ni, ni)
+    cols = np.concatenate([np.ones((nf, 1)), Hs.reshape(no * ni, nf).T,
+                           q.reshape(nf, ni * ni)], axis=1)
+    del q
+    sums = _lag_sums(phase, P, cols)
+    rho = sums[:, :1, None]                                                 # (2P+1, 1, 1)
+    sig = sums[:, 1:1 + no * ni]                                           # (2P+1, no*ni)
+    tau = sums[:, 1 + no * ni:].reshape(2 * P + 1, ni, ni)
     R = _toeplitz_blocks(rho, P + 1, (1, 1))
     R[np.diag_indices_from(R)] += 1e-12 * np.trace(R) / R.shape[0]
     L = np.linalg.cholesky(R)
