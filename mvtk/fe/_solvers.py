@@ -390,8 +390,18 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     if A.nnz == 0 or np.all(A.data != 0):
         return A
     n = A.shape[0]
-    group = _supervariables(A)
-    first = np.searchsorted(group, group)          # first column of each column's group
+    # groups of consecutive columns with the same stored pattern, by a hash of the
+    # pattern (a collision can only merge two groups, which keeps more entries: the
+    # entries dropped below are zero whatever the grouping)
+    length = np.diff(A.indptr)
+    w = np.random.default_rng(20261202).integers(1, 2**62, size=n, dtype=np.int64)
+    h = np.zeros(n, dtype=np.int64)
+    nzc = length > 0
+    with np.errstate(over="ignore"):
+        h[nzc] = np.add.reduceat(w[A.indices], A.indptr[:-1][nzc])
+    new = np.r_[True, (length[1:] != length[:-1]) | (h[1:] != h[:-1])]
+    group = np.cumsum(new) - 1
+    first = np.flatnonzero(new)[group]             # first column of each column's group
     size = np.bincount(group)[group]
     pos = np.arange(n) - first
     kinds, kind = np.unique(size * 64 + np.minimum(pos, 63), return_inverse=True)
@@ -400,7 +410,7 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     if nk < 2:
         return A
     kr = kind[A.indices]
-    kc = np.repeat(kind, np.diff(A.indptr))
+    kc = np.repeat(kind, length)
     nz = A.data != 0
     link = np.bincount(kr[nz] * nk + kc[nz], minlength=nk * nk).reshape(nk, nk) > 0
     _, comp = sp.csgraph.connected_components(sp.csr_matrix(link | link.T),
@@ -408,8 +418,10 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     keep = comp[kr] == comp[kc]
     if np.all(keep):
         return A
-    col = np.repeat(np.arange(n), np.diff(A.indptr))
-    indptr = np.r_[0, np.cumsum(np.bincount(col[keep], minlength=n))]
+    count = np.zeros(n, dtype=np.int64)
+    count[nzc] = np.add.reduceat(keep.astype(np.int64), A.indptr[:-1][nzc])
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(count, out=indptr[1:])
     out = sp.csc_matrix((A.data[keep], A.indices[keep], indptr.astype(A.indptr.dtype)),
                         shape=A.shape)
     out.has_sorted_indices = True
