@@ -16,7 +16,13 @@ against the thin-plate reference (Leissa, NASA SP-160, 1969, CFFF square plate,
 nu = 0.3: lambda = 3.492, 8.525, 21.43, 27.33, 31.11 as Ritz upper bounds) and against
 each other, and the practical limit of shift-invert Lanczos on this matrix: one
 factorisation plus 2 x n_modes solves, measured in the same process, with the ratio of
-mvtk's eigen step to it and the number of solves ARPACK used. The first round also
+mvtk's eigen step to it and the number of solves ARPACK used; beside it the block
+variant of that limit (the 2 x n_modes right-hand sides in one solve) and the block
+Lanczos eigen step (``method="block"``, not the default), and in the first round the
+CPU per right-hand side of one solve with k = 1, 3, 10, 20 of them. The frequencies are
+compared with OpenSees twice: mvtk with OpenSees' formulation on the same mesh
+(drilling penalty A66, ``drill_factor=1``, and no shell rotary inertia, as ShellMITC4),
+target 1e-4, and mvtk's default formulation (a modelling difference). The first round also
 measures the fill ``nnz(L) + nnz(U)`` of SuperLU with the METIS ordering against
 SuperLU's own MMD ordering, and the SuperLU-only (permissive default) eigen time when
 the CHOLMOD backend is installed. ``--large`` adds a 200 000-DOF model in a child

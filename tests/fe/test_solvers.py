@@ -208,3 +208,30 @@ def test_sturm_count_of_missed_repeated_eigenvalues(plate):
     assert S._missed_copies(K, M, np.array([1.0, 2.0])) is None  # no cluster: not checked
     # eigsh_lowest returns all three copies
     np.testing.assert_allclose(fe.eigsh_lowest(K, M, 4).omega2, [1, 2, 2, 2], rtol=1e-12)
+
+
+def test_uncoupled_zeros_are_dropped_by_kind_not_by_value(plate):
+    """A flat plate's K stores the zero membrane-bending coupling: factorize drops it
+    (and only zeros), halving SuperLU's storage; zeros inside a coupled kind (couplings
+    that vanish by the symmetry of the regular mesh) are kept, so the pattern is the
+    mesh's; a shell whose fields couple keeps every entry."""
+    K = sp.csc_matrix(plate.K)
+    K.sort_indices()
+    K0 = S._drop_uncoupled(K)
+    assert abs(K0 - K).max() == 0.0                       # only zeros dropped
+    assert K0.nnz < 0.55 * K.nnz
+    assert np.count_nonzero(K0.data == 0) > 0             # symmetric-mesh zeros kept
+    c = plate.dof_component
+    membrane, bending = np.isin(c, (0, 1, 5)), np.isin(c, (2, 3, 4))
+    assert K0[membrane][:, bending].nnz == 0
+    # the kinds are found from the nonzeros: a membrane-bending coupling keeps them all
+    Kc = K.tolil()
+    i, j = np.flatnonzero(membrane)[10], np.flatnonzero(bending)[10]
+    Kc[i, j] = Kc[j, i] = 1.0
+    Kc = Kc.tocsc()
+    Kc.sort_indices()
+    assert S._drop_uncoupled(Kc).nnz == Kc.nnz
+    full = fe.factorize(K, backend="superlu", ordering="metis")
+    assert full.nnz_storage < 0.6 * S._superlu(K, S.fill_reducing_ordering(K))[1].nnz
+    b = np.random.default_rng(3).standard_normal(plate.n_dof)
+    np.testing.assert_allclose(K @ full.solve(b), b, atol=1e-8 * np.abs(b).max())
