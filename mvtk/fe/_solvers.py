@@ -464,6 +464,12 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
     ordering : {"auto", "metis", "mmd"}
         Ordering for SuperLU (see :func:`fill_reducing_ordering`); CHOLMOD orders itself.
 
+    Notes
+    -----
+    Before factorising, the stored zeros between DOF kinds that never couple (the
+    membrane and bending DOFs of a flat shell) are dropped (:func:`_drop_uncoupled`):
+    on a flat plate this halves the factor and quarters its flops, for every backend.
+
     Returns
     -------
     Factorization
