@@ -464,12 +464,6 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
     ordering : {"auto", "metis", "mmd"}
         Ordering for SuperLU (see :func:`fill_reducing_ordering`); CHOLMOD orders itself.
 
-    Notes
-    -----
-    Before factorising, the stored zeros between DOF kinds that never couple (the
-    membrane and bending DOFs of a flat shell) are dropped (:func:`_drop_uncoupled`):
-    on a flat plate this halves the factor and quarters its flops, for every backend.
-
     Returns
     -------
     Factorization
@@ -482,6 +476,12 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
         not positive definite with ``backend="cholmod"``.
     MissingDependencyError
         ``backend="cholmod"`` without ``sksparse-minimal`` installed.
+
+    Notes
+    -----
+    Before factorising, the stored zeros between DOF kinds that never couple (the
+    membrane and bending DOFs of a flat shell) are dropped (:func:`_drop_uncoupled`):
+    on a flat plate this halves the factor and quarters its flops, for every backend.
     """
     if backend not in BACKENDS:
         raise ParameterError(f"backend must be one of {BACKENDS}, got {backend!r}")
