@@ -122,26 +122,6 @@ def _pattern_key(A: sp.csc_matrix) -> bytes:
     return h.digest()
 
 
-def _supervariables(A: sp.csc_matrix) -> np.ndarray:
-    """Group number of every column: consecutive columns with identical row patterns
-    (the DOFs of one node) share a group."""
-    n = A.shape[0]
-    indptr, indices = A.indptr.astype(np.int64), A.indices
-    length = np.diff(indptr)
-    same = np.zeros(n, dtype=bool)           # same[i]: column i has column i-1's pattern
-    if n > 1:
-        cand = np.flatnonzero(length[1:] == length[:-1]) + 1
-        if cand.size:
-            ln = length[cand]
-            pos = np.repeat(indptr[cand] - np.cumsum(np.r_[0, ln[:-1]]), ln) + np.arange(
-                ln.sum())
-            mismatch = indices[pos] != indices[pos - length[cand].repeat(ln)]
-            bad = np.bincount(np.repeat(np.arange(len(cand)), ln), weights=mismatch,
-                              minlength=len(cand))
-            same[cand[bad == 0]] = True
-    return np.cumsum(~same) - 1
-
-
 def fill_reducing_ordering(A, method: str = "auto") -> np.ndarray | None:
     """Symmetric fill-reducing permutation ``p`` (factorise ``A[p][:, p]``).
 
@@ -285,11 +265,6 @@ def _ranges(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
     """Concatenation of ``arange(start[i], stop[i])``."""
     ln = stop - start
     return np.repeat(start - np.r_[0, np.cumsum(ln)[:-1]], ln) + np.arange(int(ln.sum()))
-
-
-def _ranges_local(size: np.ndarray) -> np.ndarray:
-    """Concatenation of ``arange(size[i])``."""
-    return np.arange(int(size.sum())) - np.repeat(np.r_[0, np.cumsum(size)[:-1]], size)
 
 
 class Factorization:
