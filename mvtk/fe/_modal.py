@@ -163,7 +163,7 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     from ._beam import _element_frames, timoshenko_element_matrices
     from ._laminate import Laminate
     from ._shell import mitc4_matrices
-    from ._shell3d import mitc3_matrices, shell_local_geometry
+    from ._shell3d import _local_frames, mitc3_matrices, shell_local_geometry
 
     phi = np.asarray(shapes, dtype=float)
     if phi.ndim == 1:
@@ -196,8 +196,19 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
             ax = np.asarray(axis, dtype=float)
             if ax.ndim == 2:
                 ax = ax[start:start + _CHUNK]
-            xy, T = shell_local_geometry(model.nodes[c], ax)
-            ue = np.einsum("eij,ejk->eik", T, u[dofs])  # element-frame DOFs
+            local, R = _local_frames(model.nodes[c], ax)
+            if np.any(local[:, :, 2] != 0) or np.any(R != R[0]):
+                # warped or differently oriented elements: the general transformation
+                xy, T = shell_local_geometry(model.nodes[c], ax)
+                ue = T @ u[dofs]  # element-frame DOFs
+            else:
+                # exactly flat elements sharing one frame R (a flat plate): T is R on
+                # every 3-vector (translations, rotations) of every node, applied as one
+                # product, and not at all when R is the identity (a plate in x-y)
+                xy = local[:, :, :2]
+                ug = u[dofs].reshape(len(c), -1, 3, k)
+                ue = ug if np.array_equal(R[0], np.eye(3)) else R[0] @ ug
+                ue = ue.reshape(len(c), -1, k)
             # identical element shapes share their matrices (structured meshes): the four
             # parts of each distinct shape come from one element-matrix call
             scale = max(float(np.abs(xy).max()), 1e-300)

@@ -79,6 +79,7 @@ def test_factorize_singular_and_bad_input():
 
 def test_cholmod_backend_missing(monkeypatch):
     monkeypatch.setattr(S, "_cholmod_module", lambda: None)
+    monkeypatch.delenv("MVTK_SPARSE_BACKEND", raising=False)   # "auto" below
     with pytest.raises(MissingDependencyError, match=r'pip install "mvtk\[cholmod\]"'):
         fe.factorize(sp.eye(3, format="csc"), backend="cholmod")
     assert fe.factorize(_laplacian_2d(9)).backend == "superlu"   # auto falls back
@@ -156,12 +157,14 @@ def test_free_free_plate_finds_rigid_modes():
 
 
 def test_memory_estimate_predicts_superlu_storage(plate):
-    """The estimate is exact for the storage SuperLU allocates (same METIS ordering),
-    from the matrix or from the node graph alone (no assembly)."""
+    """The estimate from the matrix is exact for the storage SuperLU allocates (same
+    METIS ordering, same dropped zeros of uncoupled membrane and bending DOFs); from the
+    node graph alone (no assembly) it cannot know which DOF kinds are uncoupled and is
+    the exact estimate of the fully coupled pattern, an upper bound."""
     est = fe.estimate_eigen_memory(plate.K, 10)
     lu = fe.factorize(plate.K, backend="superlu")
     assert est.nnz_factor == lu.nnz_storage
-    assert est.nnz_matrix == plate.K.nnz
+    assert est.nnz_matrix == S._drop_uncoupled(sp.csc_matrix(plate.K)).nnz
     assert est.n_dof == plate.n_dof
     el = plate.elements["mitc4"]
     r = np.repeat(el, 4, axis=1).ravel()
@@ -169,7 +172,11 @@ def test_memory_estimate_predicts_superlu_storage(plate):
     G = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(plate.n_nodes,) * 2)
     nfree = np.bincount(plate.dof_node, minlength=plate.n_nodes)
     est2 = fe.estimate_eigen_memory(G, 10, dofs_per_vertex=nfree)
-    assert est2.nnz_factor == est.nnz_factor and est2.total == est.total
+    full = sp.csc_matrix((np.ones(plate.K.nnz), plate.K.indices, plate.K.indptr),
+                         shape=plate.K.shape)
+    est_full = fe.estimate_eigen_memory(full, 10)
+    assert est2.nnz_factor == est_full.nnz_factor and est2.total == est_full.total
+    assert est2.nnz_factor > 1.5 * est.nnz_factor       # flat plate: about 2x
     assert est.total > est.solve > S.FACTOR_BYTES_PER_NNZ * est.nnz_factor
     assert list(est.to_dataframe()["part"]) == ["matrices", "solve", "total"]
     with pytest.raises(ParameterError, match="n_modes must be a positive integer"):
@@ -201,3 +208,30 @@ def test_sturm_count_of_missed_repeated_eigenvalues(plate):
     assert S._missed_copies(K, M, np.array([1.0, 2.0])) is None  # no cluster: not checked
     # eigsh_lowest returns all three copies
     np.testing.assert_allclose(fe.eigsh_lowest(K, M, 4).omega2, [1, 2, 2, 2], rtol=1e-12)
+
+
+def test_uncoupled_zeros_are_dropped_by_kind_not_by_value(plate):
+    """A flat plate's K stores the zero membrane-bending coupling: factorize drops it
+    (and only zeros), halving SuperLU's storage; zeros inside a coupled kind (couplings
+    that vanish by the symmetry of the regular mesh) are kept, so the pattern is the
+    mesh's; a shell whose fields couple keeps every entry."""
+    K = sp.csc_matrix(plate.K)
+    K.sort_indices()
+    K0 = S._drop_uncoupled(K)
+    assert abs(K0 - K).max() == 0.0                       # only zeros dropped
+    assert K0.nnz < 0.55 * K.nnz
+    assert np.count_nonzero(K0.data == 0) > 0             # symmetric-mesh zeros kept
+    c = plate.dof_component
+    membrane, bending = np.isin(c, (0, 1, 5)), np.isin(c, (2, 3, 4))
+    assert K0[membrane][:, bending].nnz == 0
+    # the kinds are found from the nonzeros: a membrane-bending coupling keeps them all
+    Kc = K.tolil()
+    i, j = np.flatnonzero(membrane)[10], np.flatnonzero(bending)[10]
+    Kc[i, j] = Kc[j, i] = 1.0
+    Kc = Kc.tocsc()
+    Kc.sort_indices()
+    assert S._drop_uncoupled(Kc).nnz == Kc.nnz
+    full = fe.factorize(K, backend="superlu", ordering="metis")
+    assert full.nnz_storage < 0.6 * S._superlu(K, S.fill_reducing_ordering(K))[1].nnz
+    b = np.random.default_rng(3).standard_normal(plate.n_dof)
+    np.testing.assert_allclose(K @ full.solve(b), b, atol=1e-8 * np.abs(b).max())
