@@ -33,10 +33,37 @@ FIG_WIDTH = 7.0
 MAX_POINTS = 2000
 
 
-def _figure(width: float = FIG_WIDTH, height: float = 4.0):
+#: Fixed margins of the line plots in inches: room for tick labels (up to 7 characters
+#: or a power of ten) and the axis label on the left, tick labels and axis label below,
+#: a title above. A fixed layout draws the same elements as matplotlib's constrained
+#: layout but does not lay out every text twice before drawing it (half the render time
+#: of a report figure); ``tests/report`` checks that no text leaves the figure and no
+#: panel overlaps another.
+MARGIN_LEFT, MARGIN_RIGHT, MARGIN_BOTTOM = 0.9, 0.2, 0.55
+#: Margin above the top panel with (without) a title, and the gap between stacked panels
+#: (the upper panel's tick labels and axis label, the lower panel's title), inches.
+MARGIN_TITLE, MARGIN_TOP, PANEL_GAP = 0.4, 0.15, 0.8
+
+
+def _constrained_figure(width: float = FIG_WIDTH, height: float = 4.0):
+    """A figure laid out by matplotlib's constrained layout (colorbars, grids)."""
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), layout="constrained")
+
+
+def _figure(width: float = FIG_WIDTH, height: float = 4.0, *, n_rows: int = 1,
+            title: bool = True):
+    """A figure with fixed margins for ``n_rows`` stacked full-width panels."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height))
+    top = MARGIN_TITLE if title else MARGIN_TOP
+    panel = (height - top - MARGIN_BOTTOM - PANEL_GAP * (n_rows - 1)) / n_rows
+    fig.subplots_adjust(left=MARGIN_LEFT / width, right=1 - MARGIN_RIGHT / width,
+                        bottom=MARGIN_BOTTOM / height, top=1 - top / height,
+                        hspace=PANEL_GAP / panel if n_rows > 1 else 0.0)
+    return fig
 
 
 def minmax_decimate(x: Any, y: Any, n_bins: int = MAX_POINTS // 2):
@@ -163,7 +190,7 @@ def plot_frf(
     f, (h,) = _crop(f, [h], f_range)
     if not markers:
         f, h = minmax_decimate(f, h)
-    fig = _figure()
+    fig = _figure(title=bool(title))
     ax = fig.add_subplot()
     ax.semilogy(f, h, lw=1.0, color="C0", label="FRF", marker="o" if markers else None,
                 ms=3)
@@ -222,7 +249,8 @@ def plot_decay(
     for name, arr in (("envelope", envelope), ("fit", fit)):
         if arr is not None and np.shape(arr) != tt.shape:
             raise DimensionError(f"{name} has shape {np.shape(arr)} but t has {tt.shape}")
-    fig = _figure(FIG_WIDTH, 6.0 if log_panel else 4.0)
+    fig = _figure(FIG_WIDTH, 6.0 if log_panel else 4.0, n_rows=2 if log_panel else 1,
+                  title=bool(title))
     ax = fig.add_subplot(2 if log_panel else 1, 1, 1)
     long_record = tt.size > MAX_POINTS
     if long_record:
@@ -301,7 +329,7 @@ def plot_mode_shapes(
 
     n_modes = u.shape[1]
     n_rows = int(np.ceil(n_modes / n_cols))
-    fig = _figure(FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows)
+    fig = _constrained_figure(FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows)
     tri = Triangulation(xyz[:, 0] * 1e3, xyz[:, 1] * 1e3)
     for k in range(n_modes):
         ax = fig.add_subplot(n_rows, n_cols, k + 1)
@@ -343,7 +371,8 @@ def plot_time_responses(
     for name, y in responses.items():
         if np.asarray(y).shape != tt.shape:
             raise DimensionError(f"response {name!r} has shape {np.shape(y)}, t has {tt.shape}")
-    fig = _figure(FIG_WIDTH, 6.0 if zoom else 4.0)
+    fig = _figure(FIG_WIDTH, 6.0 if zoom else 4.0, n_rows=2 if zoom else 1,
+                  title=bool(title))
     axes = [fig.add_subplot(2 if zoom else 1, 1, 1)]
     if zoom:
         axes.append(fig.add_subplot(2, 1, 2))
@@ -378,7 +407,7 @@ def plot_spectra(
     f = _vec("f_hz", f_hz)
     if not spectra:
         raise ParameterError("spectra is empty; give at least one labelled spectrum")
-    fig = _figure()
+    fig = _figure(title=bool(title))
     ax = fig.add_subplot()
     for i, (name, s) in enumerate(spectra.items()):
         a = np.abs(np.asarray(s))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -316,7 +317,10 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                               ylabel=f"tip displacement [{d.get('decay_units', '')}]",
                               title="Free decay from mode 1 and the envelope fit"),
                    "Free decay (raw, not band-passed) with the fitted exponential envelope "
-                   "(scaled to the initial amplitude).")
+                   "(scaled to the initial amplitude).",
+                   # a band of 1000 min/max columns and two 2000-point fits: its SVG is
+                   # larger than the PNG, so the PNG is rendered directly
+                   image_format="png")
 
 
 def _section_fe(rep: Report, res: StudyResult) -> None:
@@ -391,7 +395,7 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
 
 
 def _section_uncertainty(rep: Report, res: StudyResult) -> None:
-    from ..scale import MonteCarloResult, plot_fn_histogram
+    from ..plot import plot_fn_histogram
 
     if "uncertainty" not in res.study.config:
         return
@@ -424,8 +428,9 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
         sec.note(w, kind="unavailable")
     arr = res.arrays.get("uncertainty")
     if arr is not None:
-        mc = MonteCarloResult(samples=arr[["fn_hz"]], distributions={})
-        sec.figure(plot_fn_histogram(mc, bins=12),
+        # the samples as they are (not mvtk.scale.MonteCarloResult: importing mvtk.scale
+        # would load its dask and signal-processing stack for one figure)
+        sec.figure(plot_fn_histogram(SimpleNamespace(fn_hz=arr["fn_hz"].values), bins=12),
                    "Histograms of the sampled eigenfrequencies: mean (black) and the 5 % / "
                    "95 % percentiles (red, dashed).")
 
