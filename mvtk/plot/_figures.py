@@ -108,16 +108,17 @@ def minmax_decimate(x: Any, y: Any, n_bins: int = MAX_POINTS // 2):
     starts = starts[starts < n]
     lens = np.diff(np.r_[starts, n])
     starts, lens = starts[lens > 0], lens[lens > 0]
+    # per bin the first index of its minimum and of its maximum (NaN and inf ignored;
+    # an all-NaN bin keeps its first sample), vectorised over the bins
     y_fin = np.where(np.isfinite(yy), yy, np.nan)
-    imin = np.empty(starts.size, dtype=int)
-    imax = np.empty(starts.size, dtype=int)
-    for k, (a, m) in enumerate(zip(starts, lens)):
-        seg = y_fin[a:a + m]
-        if np.all(np.isnan(seg)):
-            imin[k] = imax[k] = a
-        else:
-            imin[k] = a + int(np.nanargmin(seg))
-            imax[k] = a + int(np.nanargmax(seg))
+    with np.errstate(invalid="ignore"):
+        lo = np.fmin.reduceat(y_fin, starts)
+        hi = np.fmax.reduceat(y_fin, starts)
+    pos = np.arange(n)
+    imin = np.minimum.reduceat(np.where(y_fin == np.repeat(lo, lens), pos, n), starts)
+    imax = np.minimum.reduceat(np.where(y_fin == np.repeat(hi, lens), pos, n), starts)
+    imin = np.where(imin < n, imin, starts)
+    imax = np.where(imax < n, imax, starts)
     idx = np.sort(np.unique(np.r_[imin, imax]))
     return xx[idx], yy[idx]
 
@@ -329,7 +330,17 @@ def plot_mode_shapes(
 
     n_modes = u.shape[1]
     n_rows = int(np.ceil(n_modes / n_cols))
-    fig = _constrained_figure(FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows)
+    from matplotlib.figure import Figure
+
+    width, height = FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows
+    fig = Figure(figsize=(width, height))
+    # fixed margins (inches): small tick labels and axis labels, panel titles, and the
+    # colorbar with its label on the right
+    left, right, bottom, top, wgap, hgap = 0.6, 1.2, 0.45, 0.3, 0.6, 0.6
+    ax_w = (width - left - right - wgap * (n_cols - 1)) / n_cols
+    ax_h = (height - bottom - top - hgap * (n_rows - 1)) / n_rows
+    fig.subplots_adjust(left=left / width, right=1 - right / width, bottom=bottom / height,
+                        top=1 - top / height, wspace=wgap / ax_w, hspace=hgap / ax_h)
     tri = Triangulation(xyz[:, 0] * 1e3, xyz[:, 1] * 1e3)
     for k in range(n_modes):
         ax = fig.add_subplot(n_rows, n_cols, k + 1)
@@ -343,7 +354,9 @@ def plot_mode_shapes(
         ax.set_xlabel("x [mm]", fontsize=8)
         ax.set_ylabel("y [mm]", fontsize=8)
         ax.tick_params(labelsize=7)
-    fig.colorbar(cs, ax=fig.axes, shrink=0.8, label="uz (normalised)")
+    cax = fig.add_axes(((width - 0.95) / width, 0.1 + 0.8 * bottom / height, 0.2 / width,
+                        0.8 * (1 - (top + bottom) / height)))
+    fig.colorbar(cs, cax=cax, label="uz (normalised)")
     return fig
 
 
