@@ -8,6 +8,7 @@ GUI backend is touched and nothing is kept in a global figure registry. Convert 
 from __future__ import annotations
 
 import io
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -123,6 +124,48 @@ def minmax_decimate(x: Any, y: Any, n_bins: int = MAX_POINTS // 2):
     return xx[idx], yy[idx]
 
 
+_SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075"
+                                                 "\u2076\u2077\u2078\u2079")
+_MATH_LABEL = re.compile(r"^\$\\mathdefault\{(-?)(?:([0-9.e+]+)\\times)?(?:10\^\{(-?\d+)\}|"
+                         r"([0-9.e+-]+))\}\$$")
+
+
+def _plain_log_label(label: str) -> str:
+    """``$\\mathdefault{6\\times10^{3}}$`` -> ``6×10³`` (Unicode, no mathtext).
+
+    The labels matplotlib's log formatter writes: ``10^{k}``, ``c\\times10^{k}`` and
+    plain numbers. Anything else is returned unchanged (drawn as mathtext).
+    """
+    m = _MATH_LABEL.match(label)
+    if not m:
+        return label
+    sign, coeff, exp, plain = m.groups()
+    if plain is not None:
+        return sign + plain
+    power = "10" + exp.translate(_SUPERSCRIPT)
+    return sign + (f"{coeff}\u00d7{power}" if coeff else power)
+
+
+def _plain_log_axis(axis) -> None:
+    """Label a log axis as matplotlib does, typeset as Unicode text, not mathtext.
+
+    The same ticks get the same labels (matplotlib's own formatter decides which
+    minor ticks are labelled); only the typesetting differs: ``10³`` instead of the
+    mathtext ``10^{3}``, whose parsing is a third of the render time of a log plot.
+    """
+    from matplotlib.ticker import LogFormatterSciNotation
+
+    class _Plain(LogFormatterSciNotation):
+        def __call__(self, x, pos=None):
+            return _plain_log_label(super().__call__(x, pos))
+
+    major, minor = axis.get_major_formatter(), axis.get_minor_formatter()
+    if isinstance(major, LogFormatterSciNotation) and isinstance(minor,
+                                                                 LogFormatterSciNotation):
+        axis.set_major_formatter(_Plain(labelOnlyBase=major.labelOnlyBase))
+        axis.set_minor_formatter(_Plain(labelOnlyBase=minor.labelOnlyBase))
+
+
 def _bin_extrema(t: np.ndarray, y: np.ndarray, n_bins: int):
     """Bin centres, minimum and maximum of ``y`` in ``n_bins`` equal bins of ``t``."""
     edges = np.linspace(t[0], t[-1], n_bins + 1)
@@ -195,6 +238,7 @@ def plot_frf(
     ax = fig.add_subplot()
     ax.semilogy(f, h, lw=1.0, color="C0", label="FRF", marker="o" if markers else None,
                 ms=3)
+    _plain_log_axis(ax.yaxis)
     for i, (lo, hi, fn) in enumerate(bands):
         ax.axvspan(lo, hi, color="C3", alpha=0.25, label="half-power band" if i == 0 else None)
         ax.axvline(fn, color="C3", lw=0.8, ls="--")
@@ -281,6 +325,7 @@ def plot_decay(
             mid, peak = tt, np.abs(xx)
         good = np.isfinite(peak) & (peak > 0)
         ax2.semilogy(mid[good], peak[good], lw=0.8, color="0.35", label="peak |signal|")
+        _plain_log_axis(ax2.yaxis)
         if fit is not None:
             ff = np.asarray(fit, dtype=float)
             pos = ff > 0
@@ -430,6 +475,7 @@ def plot_spectra(
         fd, ad = minmax_decimate(fc, ac)
         ax.semilogy(fd, np.maximum(ad, np.finfo(float).tiny), lw=0.9, color=f"C{i}",
                     label=name)
+    _plain_log_axis(ax.yaxis)
     if f_range is not None:
         ax.set_xlim(*f_range)
     ax.set_xlabel("frequency [Hz]")

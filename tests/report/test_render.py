@@ -252,3 +252,33 @@ def _alive(pid):
             return fh.read().split()[2] != "Z"
     except FileNotFoundError:
         return False
+
+
+@pytest.mark.parametrize("ylim", [(1e-6, 1e4), (1.3e3, 1.4e4), (2.1e3, 3.9e3), (0.2, 0.9)])
+def test_log_axis_labels_are_matplotlibs_typeset_without_mathtext(ylim):
+    # the same ticks carry the same labels as matplotlib's own log formatter (external
+    # truth), written as Unicode text instead of mathtext
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from mvtk.plot._figures import _plain_log_axis
+
+    def labels(plain):
+        fig = Figure(figsize=(7, 4))
+        FigureCanvasAgg(fig)
+        ax = fig.add_subplot()
+        ax.semilogy([1, 2], ylim)
+        if plain:
+            _plain_log_axis(ax.yaxis)
+        ax.set_ylim(*ylim)
+        fig.canvas.draw()
+        return [t.get_text() for t in ax.yaxis.get_ticklabels(which="both")]
+
+    stock, plain = labels(False), labels(True)
+    assert any(stock) and len(stock) == len(plain)
+    sup = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+    for s, p in zip(stock, plain):
+        assert "$" not in p
+        want = s.replace(r"$\mathdefault{", "").replace("}$", "").replace(r"\times", "×")
+        want = want.replace("^{", "").replace("}", "")
+        assert p.translate(sup) == want, (s, p)
