@@ -44,6 +44,9 @@ MARGIN_LEFT, MARGIN_RIGHT, MARGIN_BOTTOM = 0.9, 0.2, 0.55
 #: Margin above the top panel with (without) a title, and the gap between stacked panels
 #: (the upper panel's tick labels and axis label, the lower panel's title), inches.
 MARGIN_TITLE, MARGIN_TOP, PANEL_GAP = 0.4, 0.15, 0.8
+#: Titles are placed at the top of their axes (``set_title(..., y=1.0)``) where
+#: matplotlib would place them too (no tick labels on top): given explicitly, matplotlib
+#: does not lay out the y axis again to look for a collision at every draw.
 
 
 def _constrained_figure(width: float = FIG_WIDTH, height: float = 4.0):
@@ -251,7 +254,7 @@ def plot_frf(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower left", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     return fig
 
 
@@ -316,7 +319,7 @@ def plot_decay(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     if log_panel:
         ax2 = fig.add_subplot(2, 1, 2, sharex=ax)
         if long_record:
@@ -395,7 +398,7 @@ def plot_mode_shapes(
         cs = ax.tricontourf(tri, shape, levels=np.linspace(-1, 1, 21), cmap="coolwarm")
         ax.tricontour(tri, shape, levels=[0.0], colors="k", linewidths=0.8)
         ax.set_aspect("equal")
-        ax.set_title(f"mode {k + 1}: {fn[k]:.2f} Hz", fontsize=9)
+        ax.set_title(f"mode {k + 1}: {fn[k]:.2f} Hz", fontsize=9, y=1.0)
         ax.set_xlabel("x [mm]", fontsize=8)
         ax.set_ylabel("y [mm]", fontsize=8)
         ax.tick_params(labelsize=7)
@@ -447,9 +450,9 @@ def plot_time_responses(
     axes[0].legend(loc="upper right", fontsize=8)
     if zoom:
         axes[1].set_xlim(*zoom)
-        axes[1].set_title(f"zoom {zoom[0]:g}-{zoom[1]:g} s", fontsize=9)
+        axes[1].set_title(f"zoom {zoom[0]:g}-{zoom[1]:g} s", fontsize=9, y=1.0)
     if title:
-        axes[0].set_title(title)
+        axes[0].set_title(title, y=1.0)
     return fig
 
 
@@ -483,5 +486,5 @@ def plot_spectra(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     return fig

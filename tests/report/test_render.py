@@ -76,6 +76,15 @@ def _texts_inside(fig):
            if e.x0 < box.x0 - 1 or e.x1 > box.x1 + 1 or e.y0 < box.y0 - 1
            or e.y1 > box.y1 + 1]
     assert not bad, f"drawn outside the figure: {bad}"
+    # titles are placed explicitly at the top of their axes: where matplotlib's own
+    # title placement (which avoids top tick labels and y offset texts) puts them too
+    placed = [ax.title.get_window_extent(r) for ax in fig.axes]
+    for ax in fig.axes:
+        ax._autotitlepos = True
+    fig.canvas.draw()
+    auto = [ax.title.get_window_extent(fig.canvas.get_renderer()) for ax in fig.axes]
+    for p, a in zip(placed, auto):
+        assert abs(p.y0 - a.y0) < 0.5 and abs(p.x0 - a.x0) < 0.5, (p, a)
     panels = [ax.get_tightbbox(r) for ax in fig.axes]
     for i in range(len(panels)):
         for j in range(i + 1, len(panels)):
@@ -106,6 +115,9 @@ def test_fixed_layouts_keep_every_label_inside_the_figure():
                    title="Free decay"),
         plot_time_responses(t, {"open loop": x, "PPF": 0.1 * x}, zoom=(0.0, 1.0),
                             title="Tip displacement"),
+        # micrometre amplitudes: the y axes carry an offset text ("1e-6") at the top
+        plot_time_responses(t, {"open loop": 1e-3 * x}, zoom=(0.0, 1.0),
+                            title="Tip displacement with and without control"),
         plot_spectra(f, {"open loop": h * 1e-9, "PPF": h * 1e-10}, f_range=(0, 60),
                      title="Amplitude spectra"),
         plot_mode_shapes(nodes, uz, [14.25, 42.18, 83.55, 143.3]),
