@@ -379,14 +379,16 @@ class Section:
                image_format: str = "auto") -> Section:
         """Add a figure, embedded in the page (base64 data URI).
 
-        A matplotlib figure is rendered as it is now, in a forked process while the
-        page is being built (see :class:`Report`'s ``workers``): changing it afterwards
-        does not change the page.
+        A matplotlib figure is rendered when the page is written, in one of the
+        report's render processes (see :class:`Report`'s ``workers``): do not change it
+        after adding it. A function returning a figure (``functools.partial(plot_frf,
+        f, H)``) is called there too, so that building the figure is shared out as well.
 
         Parameters
         ----------
-        figure : matplotlib Figure or bytes
-            A figure (rendered here) or PNG / SVG bytes.
+        figure : matplotlib Figure, bytes or callable
+            A figure, PNG / SVG bytes, or a function without arguments returning a
+            figure.
         caption, alt : str
         image_format : {"auto", "svg", "png"}
             For a matplotlib figure: ``"auto"`` gives PNG for figures with raster images,

@@ -87,10 +87,10 @@ def check_figure(figure: Any, image_format: str) -> None:
     """Raise :class:`ParameterError` unless ``figure`` can be rendered as asked."""
     if isinstance(figure, bytes | bytearray):
         return
-    if not hasattr(figure, "savefig"):
+    if not hasattr(figure, "savefig") and not callable(figure):
         raise ParameterError(
-            "a report figure must be PNG/SVG bytes or a matplotlib Figure, "
-            f"got {type(figure).__name__}"
+            "a report figure must be PNG/SVG bytes, a matplotlib Figure or a function "
+            f"returning one, got {type(figure).__name__}"
         )
     if image_format not in ("auto", "png", "svg"):
         raise ParameterError(f"image_format must be 'auto', 'png' or 'svg', got "
@@ -102,8 +102,9 @@ def render_figure(figure: Any, image_format: str = "auto") -> tuple[str, bytes]:
 
     Parameters
     ----------
-    figure : matplotlib Figure or bytes
-        PNG or SVG bytes are checked and returned as they are.
+    figure : matplotlib Figure, bytes or callable
+        PNG or SVG bytes are checked and returned as they are; a callable (e.g. a
+        ``functools.partial`` of a plot function) is called to build the figure.
     image_format : {"auto", "png", "svg"}
         ``auto``: PNG for a figure holding raster images or filled contours (an SVG
         would be larger); otherwise an SVG of at most :data:`SVG_KEEP_BYTES` (line
@@ -122,6 +123,11 @@ def render_figure(figure: Any, image_format: str = "auto") -> tuple[str, bytes]:
         raise ParameterError("figure bytes are not a PNG image (missing PNG signature) "
                              "nor an SVG document")
     check_figure(figure, image_format)
+    if not hasattr(figure, "savefig"):
+        figure = figure()
+        if not hasattr(figure, "savefig"):
+            raise ParameterError(f"a report figure function must return a matplotlib "
+                                 f"Figure, got {type(figure).__name__}")
     import matplotlib
 
     out = {}
@@ -157,8 +163,9 @@ def render_figure(figure: Any, image_format: str = "auto") -> tuple[str, bytes]:
 
 
 def _cost(job: _Job) -> int:
-    """Rough relative render cost of a job (axes drawn), to start the longest first."""
-    return len(getattr(job.figure, "axes", ()))
+    """Rough relative render cost of a job (axes drawn), to start the longest first;
+    a figure still to be built counts as one axes."""
+    return len(getattr(job.figure, "axes", (None,)))
 
 
 def _worker(conn, jobs, order, counter, parent_pid) -> None:

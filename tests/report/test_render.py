@@ -7,6 +7,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from functools import partial
 
 import numpy as np
 import pytest
@@ -134,7 +135,7 @@ def _page(workers, tmp_path, figs):
     sec = rep.section("Figures")
     for i, fig in enumerate(figs):
         sec.figure(fig, f"figure {i}")
-    sec.figure(render_figure(figs[0], "png")[1], "bytes")
+    sec.figure(render_figure(figs[1], "png")[1], "bytes")
     return rep.to_html()
 
 
@@ -142,7 +143,7 @@ def _figures():
     f = np.linspace(1.0, 400.0, 5000)
     h = 1 / np.abs(1 - (f / 80) ** 2 + 0.01j * f / 80)
     t = np.linspace(0, 6, 6001)
-    return [plot_frf(f, h, bands=[(79, 81, 80)], title="FRF"),
+    return [partial(plot_frf, f, h, bands=[(79, 81, 80)], title="FRF"),
             plot_decay(t, np.exp(-t) * np.sin(40 * t), fit=np.exp(-t), title="decay"),
             plot_spectra(f, {"a": h, "b": 2 * h}, title="spectra"),
             plot_time_responses(t, {"a": np.sin(9 * t)}, zoom=(0, 1))]

@@ -82,7 +82,7 @@ def test_report_bad_inputs():
         sec.table(pd.DataFrame({"a": [1]}), "t1")
     with pytest.raises(ParameterError, match="expected a pandas DataFrame, got list"):
         sec.table([1, 2], "t2")
-    with pytest.raises(ParameterError, match="PNG/SVG bytes or a matplotlib Figure, got str"):
+    with pytest.raises(ParameterError, match="Figure or a function returning one, got str"):
         sec.figure("plot.png")
     with pytest.raises(ParameterError, match="missing PNG signature"):
         sec.figure(b"GIF89a....")
