@@ -169,9 +169,12 @@ def _cost(job: _Job) -> int:
 
 
 def _worker(conn, jobs, order, counter, parent_pid) -> None:
-    """Render process: take the next job from ``counter`` until none is left.
+    """Render process: take the next job from ``counter`` until none is left, then send
+    the list of ``(i, "ok", mime, bytes)`` / ``(i, "error", text)`` in one message.
 
-    Sends ``(i, "ok", mime, bytes)`` or ``(i, "error", text)`` per job, then ``None``.
+    The results are sent at the end, not one by one: a send blocks once the pipe's
+    buffer (64 kB, less than one figure) is full, and the main process reads only when
+    it has no figure left to render itself.
     """
     import signal
 
@@ -181,15 +184,15 @@ def _worker(conn, jobs, order, counter, parent_pid) -> None:
     _die_with_parent()
     if os.getppid() != parent_pid:   # the parent died before prctl took effect
         os._exit(1)
+    out = []
     try:
         while (k := _next(counter)) < len(order):
             i = order[k]
             try:
-                msg = (i, "ok", *render_figure(jobs[i].figure, jobs[i].image_format))
+                out.append((i, "ok", *render_figure(jobs[i].figure, jobs[i].image_format)))
             except Exception as err:  # noqa: BLE001 - the parent renders it again
-                msg = (i, "error", f"{type(err).__name__}: {err}")
-            conn.send(msg)
-        conn.send(None)
+                out.append((i, "error", f"{type(err).__name__}: {err}"))
+        conn.send(out)
     finally:
         with contextlib.suppress(OSError):
             conn.close()
@@ -313,14 +316,11 @@ class FigureRenderer:
             while (k := _next(counter)) < len(order):
                 jobs[order[k]].run()
             for proc, conn in list(self._procs):
-                while True:
-                    try:
-                        msg = conn.recv()
-                    except (EOFError, OSError):
-                        break    # the child ended early: its jobs are rendered below
-                    if msg is None:
-                        break
-                    i, status, *rest = msg
+                try:
+                    results = conn.recv()
+                except (EOFError, OSError):
+                    results = []    # the child ended early: its jobs are rendered below
+                for i, status, *rest in results:
                     if status == "ok":
                         jobs[i].mime, jobs[i].data = rest
                         jobs[i].figure = None
