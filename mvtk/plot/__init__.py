@@ -10,6 +10,7 @@ from ._figures import (
     plot_spectra,
     plot_time_responses,
 )
+from ._histogram import plot_fn_histogram
 from ._modal import plot_automac, plot_frf_synthesis, plot_stabilisation
 
 __all__ = [
@@ -26,4 +27,5 @@ __all__ = [
     "plot_stabilisation",
     "plot_frf_synthesis",
     "plot_automac",
+    "plot_fn_histogram",
 ]

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DimensionError, ParameterError
-from ._figures import _figure
+from ._figures import _constrained_figure as _figure
 
 __all__ = ["plot_mac", "plot_paired_shapes", "plot_test_on_mesh"]
 

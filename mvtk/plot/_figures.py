@@ -8,6 +8,7 @@ GUI backend is touched and nothing is kept in a global figure registry. Convert 
 from __future__ import annotations
 
 import io
+import re
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -33,10 +34,40 @@ FIG_WIDTH = 7.0
 MAX_POINTS = 2000
 
 
-def _figure(width: float = FIG_WIDTH, height: float = 4.0):
+#: Fixed margins of the line plots in inches: room for tick labels (up to 7 characters
+#: or a power of ten) and the axis label on the left, tick labels and axis label below,
+#: a title above. A fixed layout draws the same elements as matplotlib's constrained
+#: layout but does not lay out every text twice before drawing it (half the render time
+#: of a report figure); ``tests/report`` checks that no text leaves the figure and no
+#: panel overlaps another.
+MARGIN_LEFT, MARGIN_RIGHT, MARGIN_BOTTOM = 0.9, 0.2, 0.55
+#: Margin above the top panel with (without) a title, and the gap between stacked panels
+#: (the upper panel's tick labels and axis label, the lower panel's title), inches.
+MARGIN_TITLE, MARGIN_TOP, PANEL_GAP = 0.4, 0.15, 0.8
+#: Titles are placed at the top of their axes (``set_title(..., y=1.0)``) where
+#: matplotlib would place them too (no tick labels on top): given explicitly, matplotlib
+#: does not lay out the y axis again to look for a collision at every draw.
+
+
+def _constrained_figure(width: float = FIG_WIDTH, height: float = 4.0):
+    """A figure laid out by matplotlib's constrained layout (colorbars, grids)."""
     from matplotlib.figure import Figure
 
     return Figure(figsize=(width, height), layout="constrained")
+
+
+def _figure(width: float = FIG_WIDTH, height: float = 4.0, *, n_rows: int = 1,
+            title: bool = True):
+    """A figure with fixed margins for ``n_rows`` stacked full-width panels."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height))
+    top = MARGIN_TITLE if title else MARGIN_TOP
+    panel = (height - top - MARGIN_BOTTOM - PANEL_GAP * (n_rows - 1)) / n_rows
+    fig.subplots_adjust(left=MARGIN_LEFT / width, right=1 - MARGIN_RIGHT / width,
+                        bottom=MARGIN_BOTTOM / height, top=1 - top / height,
+                        hspace=PANEL_GAP / panel if n_rows > 1 else 0.0)
+    return fig
 
 
 def minmax_decimate(x: Any, y: Any, n_bins: int = MAX_POINTS // 2):
@@ -81,18 +112,61 @@ def minmax_decimate(x: Any, y: Any, n_bins: int = MAX_POINTS // 2):
     starts = starts[starts < n]
     lens = np.diff(np.r_[starts, n])
     starts, lens = starts[lens > 0], lens[lens > 0]
+    # per bin the first index of its minimum and of its maximum (NaN and inf ignored;
+    # an all-NaN bin keeps its first sample), vectorised over the bins
     y_fin = np.where(np.isfinite(yy), yy, np.nan)
-    imin = np.empty(starts.size, dtype=int)
-    imax = np.empty(starts.size, dtype=int)
-    for k, (a, m) in enumerate(zip(starts, lens)):
-        seg = y_fin[a:a + m]
-        if np.all(np.isnan(seg)):
-            imin[k] = imax[k] = a
-        else:
-            imin[k] = a + int(np.nanargmin(seg))
-            imax[k] = a + int(np.nanargmax(seg))
+    with np.errstate(invalid="ignore"):
+        lo = np.fmin.reduceat(y_fin, starts)
+        hi = np.fmax.reduceat(y_fin, starts)
+    pos = np.arange(n)
+    imin = np.minimum.reduceat(np.where(y_fin == np.repeat(lo, lens), pos, n), starts)
+    imax = np.minimum.reduceat(np.where(y_fin == np.repeat(hi, lens), pos, n), starts)
+    imin = np.where(imin < n, imin, starts)
+    imax = np.where(imax < n, imax, starts)
     idx = np.sort(np.unique(np.r_[imin, imax]))
     return xx[idx], yy[idx]
+
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "\u207b\u2070\u00b9\u00b2\u00b3\u2074\u2075"
+                                                 "\u2076\u2077\u2078\u2079")
+_MATH_LABEL = re.compile(r"^\$\\mathdefault\{(-?)(?:([0-9.e+]+)\\times)?(?:10\^\{(-?\d+)\}|"
+                         r"([0-9.e+-]+))\}\$$")
+
+
+def _plain_log_label(label: str) -> str:
+    """``$\\mathdefault{6\\times10^{3}}$`` -> ``6×10³`` (Unicode, no mathtext).
+
+    The labels matplotlib's log formatter writes: ``10^{k}``, ``c\\times10^{k}`` and
+    plain numbers. Anything else is returned unchanged (drawn as mathtext).
+    """
+    m = _MATH_LABEL.match(label)
+    if not m:
+        return label
+    sign, coeff, exp, plain = m.groups()
+    if plain is not None:
+        return sign + plain
+    power = "10" + exp.translate(_SUPERSCRIPT)
+    return sign + (f"{coeff}\u00d7{power}" if coeff else power)
+
+
+def _plain_log_axis(axis) -> None:
+    """Label a log axis as matplotlib does, typeset as Unicode text, not mathtext.
+
+    The same ticks get the same labels (matplotlib's own formatter decides which
+    minor ticks are labelled); only the typesetting differs: ``10³`` instead of the
+    mathtext ``10^{3}``, whose parsing is a third of the render time of a log plot.
+    """
+    from matplotlib.ticker import LogFormatterSciNotation
+
+    class _Plain(LogFormatterSciNotation):
+        def __call__(self, x, pos=None):
+            return _plain_log_label(super().__call__(x, pos))
+
+    major, minor = axis.get_major_formatter(), axis.get_minor_formatter()
+    if isinstance(major, LogFormatterSciNotation) and isinstance(minor,
+                                                                 LogFormatterSciNotation):
+        axis.set_major_formatter(_Plain(labelOnlyBase=major.labelOnlyBase))
+        axis.set_minor_formatter(_Plain(labelOnlyBase=minor.labelOnlyBase))
 
 
 def _bin_extrema(t: np.ndarray, y: np.ndarray, n_bins: int):
@@ -163,10 +237,11 @@ def plot_frf(
     f, (h,) = _crop(f, [h], f_range)
     if not markers:
         f, h = minmax_decimate(f, h)
-    fig = _figure()
+    fig = _figure(title=bool(title))
     ax = fig.add_subplot()
     ax.semilogy(f, h, lw=1.0, color="C0", label="FRF", marker="o" if markers else None,
                 ms=3)
+    _plain_log_axis(ax.yaxis)
     for i, (lo, hi, fn) in enumerate(bands):
         ax.axvspan(lo, hi, color="C3", alpha=0.25, label="half-power band" if i == 0 else None)
         ax.axvline(fn, color="C3", lw=0.8, ls="--")
@@ -179,7 +254,7 @@ def plot_frf(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower left", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     return fig
 
 
@@ -222,7 +297,8 @@ def plot_decay(
     for name, arr in (("envelope", envelope), ("fit", fit)):
         if arr is not None and np.shape(arr) != tt.shape:
             raise DimensionError(f"{name} has shape {np.shape(arr)} but t has {tt.shape}")
-    fig = _figure(FIG_WIDTH, 6.0 if log_panel else 4.0)
+    fig = _figure(FIG_WIDTH, 6.0 if log_panel else 4.0, n_rows=2 if log_panel else 1,
+                  title=bool(title))
     ax = fig.add_subplot(2 if log_panel else 1, 1, 1)
     long_record = tt.size > MAX_POINTS
     if long_record:
@@ -243,7 +319,7 @@ def plot_decay(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     if log_panel:
         ax2 = fig.add_subplot(2, 1, 2, sharex=ax)
         if long_record:
@@ -252,6 +328,7 @@ def plot_decay(
             mid, peak = tt, np.abs(xx)
         good = np.isfinite(peak) & (peak > 0)
         ax2.semilogy(mid[good], peak[good], lw=0.8, color="0.35", label="peak |signal|")
+        _plain_log_axis(ax2.yaxis)
         if fit is not None:
             ff = np.asarray(fit, dtype=float)
             pos = ff > 0
@@ -301,7 +378,17 @@ def plot_mode_shapes(
 
     n_modes = u.shape[1]
     n_rows = int(np.ceil(n_modes / n_cols))
-    fig = _figure(FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows)
+    from matplotlib.figure import Figure
+
+    width, height = FIG_WIDTH, FIG_WIDTH / n_cols * 0.75 * n_rows
+    fig = Figure(figsize=(width, height))
+    # fixed margins (inches): small tick labels and axis labels, panel titles, and the
+    # colorbar with its label on the right
+    left, right, bottom, top, wgap, hgap = 0.6, 1.2, 0.45, 0.3, 0.6, 0.6
+    ax_w = (width - left - right - wgap * (n_cols - 1)) / n_cols
+    ax_h = (height - bottom - top - hgap * (n_rows - 1)) / n_rows
+    fig.subplots_adjust(left=left / width, right=1 - right / width, bottom=bottom / height,
+                        top=1 - top / height, wspace=wgap / ax_w, hspace=hgap / ax_h)
     tri = Triangulation(xyz[:, 0] * 1e3, xyz[:, 1] * 1e3)
     for k in range(n_modes):
         ax = fig.add_subplot(n_rows, n_cols, k + 1)
@@ -311,11 +398,13 @@ def plot_mode_shapes(
         cs = ax.tricontourf(tri, shape, levels=np.linspace(-1, 1, 21), cmap="coolwarm")
         ax.tricontour(tri, shape, levels=[0.0], colors="k", linewidths=0.8)
         ax.set_aspect("equal")
-        ax.set_title(f"mode {k + 1}: {fn[k]:.2f} Hz", fontsize=9)
+        ax.set_title(f"mode {k + 1}: {fn[k]:.2f} Hz", fontsize=9, y=1.0)
         ax.set_xlabel("x [mm]", fontsize=8)
         ax.set_ylabel("y [mm]", fontsize=8)
         ax.tick_params(labelsize=7)
-    fig.colorbar(cs, ax=fig.axes, shrink=0.8, label="uz (normalised)")
+    cax = fig.add_axes(((width - 0.95) / width, 0.1 + 0.8 * bottom / height, 0.2 / width,
+                        0.8 * (1 - (top + bottom) / height)))
+    fig.colorbar(cs, cax=cax, label="uz (normalised)")
     return fig
 
 
@@ -343,7 +432,8 @@ def plot_time_responses(
     for name, y in responses.items():
         if np.asarray(y).shape != tt.shape:
             raise DimensionError(f"response {name!r} has shape {np.shape(y)}, t has {tt.shape}")
-    fig = _figure(FIG_WIDTH, 6.0 if zoom else 4.0)
+    fig = _figure(FIG_WIDTH, 6.0 if zoom else 4.0, n_rows=2 if zoom else 1,
+                  title=bool(title))
     axes = [fig.add_subplot(2 if zoom else 1, 1, 1)]
     if zoom:
         axes.append(fig.add_subplot(2, 1, 2))
@@ -360,9 +450,9 @@ def plot_time_responses(
     axes[0].legend(loc="upper right", fontsize=8)
     if zoom:
         axes[1].set_xlim(*zoom)
-        axes[1].set_title(f"zoom {zoom[0]:g}-{zoom[1]:g} s", fontsize=9)
+        axes[1].set_title(f"zoom {zoom[0]:g}-{zoom[1]:g} s", fontsize=9, y=1.0)
     if title:
-        axes[0].set_title(title)
+        axes[0].set_title(title, y=1.0)
     return fig
 
 
@@ -378,7 +468,7 @@ def plot_spectra(
     f = _vec("f_hz", f_hz)
     if not spectra:
         raise ParameterError("spectra is empty; give at least one labelled spectrum")
-    fig = _figure()
+    fig = _figure(title=bool(title))
     ax = fig.add_subplot()
     for i, (name, s) in enumerate(spectra.items()):
         a = np.abs(np.asarray(s))
@@ -388,6 +478,7 @@ def plot_spectra(
         fd, ad = minmax_decimate(fc, ac)
         ax.semilogy(fd, np.maximum(ad, np.finfo(float).tiny), lw=0.9, color=f"C{i}",
                     label=name)
+    _plain_log_axis(ax.yaxis)
     if f_range is not None:
         ax.set_xlim(*f_range)
     ax.set_xlabel("frequency [Hz]")
@@ -395,5 +486,5 @@ def plot_spectra(
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper right", fontsize=8)
     if title:
-        ax.set_title(title)
+        ax.set_title(title, y=1.0)
     return fig

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ._figures import _figure
+from ._figures import _constrained_figure as _figure
 
 __all__ = ["plot_stabilisation", "plot_frf_synthesis", "plot_automac"]
 

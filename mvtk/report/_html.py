@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import base64
 import html
-import io
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -26,11 +25,11 @@ import pandas as pd
 from ..errors import ParameterError
 from ._format import ColumnFormat, FormatSpec, dict_table, format_number, format_table
 from ._provenance import Provenance
+from ._render import FigureRenderer, render_figure
 
 __all__ = ["Report", "Section", "render_table", "html_table", "tolerance_used", "TABLE_CSS"]
 
 _NAME_RE = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,80}$")
-_PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 #: Table styles shared by the report page and the notebook reprs (:func:`html_table`).
 TABLE_CSS = """
@@ -281,69 +280,26 @@ def tolerance_used(checks: pd.DataFrame, *, error_column: str = "error_pct") -> 
     return out
 
 
-#: ``image_format="auto"`` keeps an SVG up to this size (bytes) without rendering a PNG
-#: to compare: at 100 dpi the report's line plots are 30-70 kB as PNG.
-SVG_KEEP_BYTES = 100_000
+#: kept here for compatibility; the rendering lives in :mod:`mvtk.report._render`
+_figure_bytes = render_figure
 
 
-def _figure_bytes(figure: Any, image_format: str) -> tuple[str, bytes]:
-    """(mime type, bytes) of a figure.
+class _FigureBlock:
+    """A figure of a section: its HTML once the render job is done."""
 
-    ``auto``: PNG for a figure holding raster images (an SVG would embed them anyway); an
-    SVG of at most :data:`SVG_KEEP_BYTES` otherwise (line plots: sharp at any zoom and
-    selectable text); only a larger SVG is rendered as PNG too, and the smaller kept.
-    Rendering one format instead of two halves the report's figure time.
-    """
-    if isinstance(figure, bytes | bytearray):
-        data = bytes(figure)
-        if data.startswith(_PNG_MAGIC):
-            return "image/png", data
-        head = data[:400].lstrip()
-        if head.startswith(b"<?xml") or head.startswith(b"<svg"):
-            if b"<svg" not in data[:2000]:
-                raise ParameterError("figure bytes look like XML but contain no <svg> element")
-            return "image/svg+xml", data
-        raise ParameterError("figure bytes are not a PNG image (missing PNG signature) "
-                             "nor an SVG document")
-    if not hasattr(figure, "savefig"):
-        raise ParameterError(
-            "a report figure must be PNG/SVG bytes or a matplotlib Figure, "
-            f"got {type(figure).__name__}"
-        )
-    if image_format not in ("auto", "png", "svg"):
-        raise ParameterError(f"image_format must be 'auto', 'png' or 'svg', got "
-                             f"{image_format!r}")
-    import matplotlib
+    __slots__ = ("job", "number", "alt", "caption")
 
-    out = {}
-    engine = figure.get_layout_engine()
-    if image_format != "auto":
-        formats: tuple[str, ...] = (image_format,)
-    elif figure.images or any(ax.images for ax in figure.axes):
-        formats = ("png",)
-    else:
-        formats = ("svg", "png")
-    try:
-        for fmt in formats:
-            buf = io.BytesIO()
-            if fmt == "png":
-                figure.savefig(buf, format="png", dpi=100)
-            else:
-                # text as <text> (not glyph paths): smaller, selectable, searchable
-                with matplotlib.rc_context({"svg.fonttype": "none"}):
-                    figure.savefig(buf, format="svg", metadata={"Date": None})
-            out[fmt] = buf.getvalue()
-            if fmt == "svg" and image_format == "auto" and len(out[fmt]) <= SVG_KEEP_BYTES:
-                break
-            if engine is not None:
-                # the second format reuses the layout of the first (the layout engine
-                # is half of the render time); restored below
-                figure.set_layout_engine("none")
-    finally:
-        if engine is not None:
-            figure.set_layout_engine(engine)
-    fmt = min(out, key=lambda k: len(out[k]))
-    return ("image/png" if fmt == "png" else "image/svg+xml"), out[fmt]
+    def __init__(self, job, number: int, alt: str, caption: str) -> None:
+        self.job, self.number, self.alt, self.caption = job, number, alt, caption
+
+    def __str__(self) -> str:
+        if not self.job.done:
+            raise RuntimeError("figure not rendered yet: call Report.render_figures()")
+        b64 = base64.b64encode(self.job.data).decode("ascii")
+        return (f'<figure><img class="report-figure" alt="{self.alt}" '
+                f'src="data:{self.job.mime};base64,{b64}">'
+                f"<figcaption>Figure {self.number}: {html.escape(self.caption)}"
+                "</figcaption></figure>")
 
 
 @dataclass
@@ -355,7 +311,7 @@ class Section:
 
     title: str
     report: Report = field(repr=False)
-    blocks: list[str] = field(default_factory=list)
+    blocks: list[Any] = field(default_factory=list)
     anchor: str = ""
 
     def text(self, paragraph: str) -> Section:
@@ -423,26 +379,26 @@ class Section:
                image_format: str = "auto") -> Section:
         """Add a figure, embedded in the page (base64 data URI).
 
+        A matplotlib figure is rendered when the page is written, in one of the
+        report's render processes (see :class:`Report`'s ``workers``): do not change it
+        after adding it. A function returning a figure (``functools.partial(plot_frf,
+        f, H)``) is called there too, so that building the figure is shared out as well.
+
         Parameters
         ----------
-        figure : matplotlib Figure or bytes
-            A figure (rendered here) or PNG / SVG bytes.
+        figure : matplotlib Figure, bytes or callable
+            A figure, PNG / SVG bytes, or a function without arguments returning a
+            figure.
         caption, alt : str
         image_format : {"auto", "svg", "png"}
             For a matplotlib figure: ``"auto"`` gives PNG for figures with raster images,
             SVG for line plots up to :data:`SVG_KEEP_BYTES`, and the smaller of the two
             for larger ones.
         """
-        mime, data = _figure_bytes(figure, image_format)
-        b64 = base64.b64encode(data).decode("ascii")
+        job = self.report._renderer().submit(figure, image_format)
         alt_text = html.escape(alt if alt is not None else caption or self.title)
         self.report.n_figures += 1
-        self.blocks.append(
-            f'<figure><img class="report-figure" alt="{alt_text}" '
-            f'src="data:{mime};base64,{b64}">'
-            f"<figcaption>Figure {self.report.n_figures}: {html.escape(caption)}"
-            "</figcaption></figure>"
-        )
+        self.blocks.append(_FigureBlock(job, self.report.n_figures, alt_text, caption))
         return self
 
     def preformatted(self, text: str) -> Section:
@@ -451,14 +407,24 @@ class Section:
         return self
 
     def render(self) -> str:
+        """HTML of the section (renders the report's pending figures first)."""
+        self.report.render_figures()
         return f'<section id="{self.anchor}"><h2>{html.escape(self.title)}</h2>\n' + "\n".join(
-            self.blocks
+            map(str, self.blocks)
         ) + "</section>"
 
 
 @dataclass
 class Report:
     """Builder of a self-contained HTML report.
+
+    Parameters
+    ----------
+    title : str
+    workers : int, optional
+        Processes rendering figures at the same time, forked as each figure is added
+        (default: ``MVTK_REPORT_WORKERS`` or the usable CPUs; ``0``: render in process,
+        as each figure is added). Without ``fork`` (Windows) figures render in process.
 
     Examples
     --------
@@ -476,6 +442,19 @@ class Report:
     provenance: Provenance | None = None
     summary_html: str = ""
     summary_verdict: str = ""
+    workers: int | None = None
+    _figure_renderer: FigureRenderer | None = field(default=None, init=False,
+                                                    repr=False, compare=False)
+
+    def _renderer(self) -> FigureRenderer:
+        if self._figure_renderer is None:
+            self._figure_renderer = FigureRenderer(self.workers)
+        return self._figure_renderer
+
+    def render_figures(self) -> None:
+        """Wait until every figure added so far is rendered (done by :meth:`to_html`)."""
+        if self._figure_renderer is not None:
+            self._figure_renderer.wait()
 
     def section(self, title: str) -> Section:
         """Append and return a new section."""

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -287,7 +289,7 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                 if t == test and np.isfinite([a, b, c]).all()]
 
     if arr is not None and "frf_abs_bb" in arr:
-        sec.figure(plot_frf(arr["frequency_bb"].values, arr["frf_abs_bb"].values,
+        sec.figure(partial(plot_frf, arr["frequency_bb"].values, arr["frf_abs_bb"].values,
                             bands=_bands("broadband"), f_range=(5.0, 400.0),
                             ylabel=f"|H| [{d.get('frf_units', '')}]",
                             title="Broadband impact FRF (H1) with half-power bands"),
@@ -295,13 +297,13 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                    "half-power bands of the higher identified modes (shaded).")
     if arr is not None and "frf_abs" in arr:
         bands = _bands("impact")
-        sec.figure(plot_frf(arr["frequency"].values, arr["frf_abs"].values, bands=bands,
+        sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values, bands=bands,
                             ylabel=f"|H| [{d.get('frf_units', '')}]",
                             title="Impact FRF (H1) with half-power bands"),
                    "Impact-test FRF with the half-power bands of each mode (shaded).")
         for i, (lo, hi, fn) in enumerate(bands):
             w = max(6 * (hi - lo), 0.3)
-            sec.figure(plot_frf(arr["frequency"].values, arr["frf_abs"].values,
+            sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values,
                                 bands=[(lo, hi, fn)], f_range=(fn - w, fn + w),
                                 ylabel="|H|", markers=True,
                                 title=f"Mode {i + 1}: zoom on the half-power band"),
@@ -312,11 +314,14 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
         fn, z = d["envelope"]["fn_hz"][0], d["envelope"]["zeta"][0]
         a0 = float(np.max(np.abs(x[t < t[0] + 2.0 / fn])))
         fit = a0 * np.exp(-z * 2 * np.pi * fn * (t - t[0]))
-        sec.figure(plot_decay(t, x, fit=fit, label_fit=f"exp(-zeta wn t), zeta = {z:.3e}",
+        sec.figure(partial(plot_decay, t, x, fit=fit, label_fit=f"exp(-zeta wn t), zeta = {z:.3e}",
                               ylabel=f"tip displacement [{d.get('decay_units', '')}]",
                               title="Free decay from mode 1 and the envelope fit"),
                    "Free decay (raw, not band-passed) with the fitted exponential envelope "
-                   "(scaled to the initial amplitude).")
+                   "(scaled to the initial amplitude).",
+                   # a band of 1000 min/max columns and two 2000-point fits: its SVG is
+                   # larger than the PNG, so the PNG is rendered directly
+                   image_format="png")
 
 
 def _section_fe(rep: Report, res: StudyResult) -> None:
@@ -385,13 +390,13 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
     arr = res.arrays.get("fe")
     if arr is not None:
         k = min(4, arr.sizes["mode"])
-        sec.figure(plot_mode_shapes(arr["nodes"].values, arr["uz"].values[:, :k],
+        sec.figure(partial(plot_mode_shapes, arr["nodes"].values, arr["uz"].values[:, :k],
                                     fe["fn_hz"][:k]),
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
 
 
 def _section_uncertainty(rep: Report, res: StudyResult) -> None:
-    from ..scale import MonteCarloResult, plot_fn_histogram
+    from ..plot import plot_fn_histogram
 
     if "uncertainty" not in res.study.config:
         return
@@ -424,8 +429,9 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
         sec.note(w, kind="unavailable")
     arr = res.arrays.get("uncertainty")
     if arr is not None:
-        mc = MonteCarloResult(samples=arr[["fn_hz"]], distributions={})
-        sec.figure(plot_fn_histogram(mc, bins=12),
+        # the samples as they are (not mvtk.scale.MonteCarloResult: importing mvtk.scale
+        # would load its dask and signal-processing stack for one figure)
+        sec.figure(partial(plot_fn_histogram, SimpleNamespace(fn_hz=arr["fn_hz"].values), bins=12),
                    "Histograms of the sampled eigenfrequencies: mean (black) and the 5 % / "
                    "95 % percentiles (red, dashed).")
 
@@ -514,13 +520,13 @@ def _section_control(rep: Report, res: StudyResult) -> None:
     if arr is not None:
         t = arr["time"].values
         tips = {str(r): arr["tip"].sel(run=r).values for r in arr["run"].values}
-        sec.figure(plot_time_responses(t, tips, zoom=(0.0, min(1.0, t[-1])),
+        sec.figure(partial(plot_time_responses, t, tips, zoom=(0.0, min(1.0, t[-1])),
                                        title="Tip displacement with and without control"),
                    "Tip displacement vs time (top) and a zoom on the first second (bottom).")
         f = arr["frequency"].values
         spec = {str(r): arr["spectrum"].sel(run=r).values for r in arr["run"].values}
         fmax = min(f[-1], 60.0)
-        sec.figure(plot_spectra(f, spec, f_range=(0.0, fmax),
+        sec.figure(partial(plot_spectra, f, spec, f_range=(0.0, fmax),
                                 title="Amplitude spectra of the tip displacement"),
                    "FFT amplitude spectra of the tip displacement with and without control.")
 

@@ -82,7 +82,7 @@ def test_report_bad_inputs():
         sec.table(pd.DataFrame({"a": [1]}), "t1")
     with pytest.raises(ParameterError, match="expected a pandas DataFrame, got list"):
         sec.table([1, 2], "t2")
-    with pytest.raises(ParameterError, match="PNG/SVG bytes or a matplotlib Figure, got str"):
+    with pytest.raises(ParameterError, match="Figure or a function returning one, got str"):
         sec.figure("plot.png")
     with pytest.raises(ParameterError, match="missing PNG signature"):
         sec.figure(b"GIF89a....")
@@ -229,15 +229,16 @@ def test_figure_format_auto_picks_the_smaller():
         sec.figure(fig, name)
     assert sizes["line", "svg"] < sizes["line", "png"]  # both choices are exercised
     assert sizes["contour", "png"] < sizes["contour", "svg"]
-    mimes = re.findall(r'src="data:([^;]+);base64', "".join(sec.blocks))
+    mimes = re.findall(r'src="data:([^;]+);base64', sec.render())
     expect = ["image/svg+xml" if sizes[n, "svg"] < sizes[n, "png"] else "image/png"
               for n in ("line", "contour")]
     assert mimes == expect
     sec.figure(line, image_format="png").figure(line, image_format="svg")
-    mimes = re.findall(r'src="data:([^;]+);base64', "".join(sec.blocks))
+    mimes = re.findall(r'src="data:([^;]+);base64', sec.render())
     assert mimes[2:] == ["image/png", "image/svg+xml"]
     # a line plot whose SVG exceeds SVG_KEEP_BYTES: both rendered, the smaller (PNG) kept
-    from mvtk.report._html import SVG_KEEP_BYTES, _figure_bytes
+    from mvtk.report._render import SVG_KEEP_BYTES
+    from mvtk.report._render import render_figure as _figure_bytes
 
     dense = Figure(figsize=(7, 3))
     dense.add_subplot().plot(np.random.default_rng(2).random(20_000))
