@@ -336,19 +336,23 @@ def _first_order_cov(description: dict, scatter: dict, n_modes: int, rel_step: f
     """Log-sensitivities d ln f / d ln p (central differences) and the first-order CoV.
 
     For independent inputs with coefficients of variation ``c_i``, to first order
-    ``CoV(f_j) = sqrt(sum_i (S_ij c_i)^2)`` with ``S_ij = d ln f_j / d ln p_i``.
+    ``CoV(f_j) = sqrt(sum_i (S_ij c_i)^2)`` with ``S_ij = d ln f_j / d ln p_i``. The
+    ``2 n_params`` perturbed models are one :func:`mvtk.scale.parameter_study` (each
+    row moves one input, the others stay at their value in ``description``).
     """
-    from ..fe import build_model, get_by_path, modal_analysis
-    from ..updating import with_values
+    from ..fe import get_by_path
+    from ..scale import parameter_study
 
-    sens = []
-    for path in scatter:
-        p0 = float(get_by_path(description, path))
-        f = [modal_analysis(build_model(with_values(description, {path: p0 * (1 + s)})),
-                            n_modes).fn_hz for s in (rel_step, -rel_step)]
-        sens.append((np.log(f[0]) - np.log(f[1]))
-                    / (np.log1p(rel_step) - np.log1p(-rel_step)))
-    sens = np.asarray(sens)  # (n_params, n_modes)
+    paths = list(scatter)
+    p0 = np.array([float(get_by_path(description, path)) for path in paths])
+    rows = np.repeat(p0[None, :], 2 * len(paths), axis=0)
+    for i in range(len(paths)):
+        rows[2 * i, i] *= 1 + rel_step
+        rows[2 * i + 1, i] *= 1 - rel_step
+    f = parameter_study(description, {p: rows[:, i] for i, p in enumerate(paths)},
+                        n_modes=n_modes)["fn_hz"].values
+    sens = ((np.log(f[0::2]) - np.log(f[1::2]))
+            / (np.log1p(rel_step) - np.log1p(-rel_step)))   # (n_params, n_modes)
     c = np.array([float(v) for v in scatter.values()])
     return sens, np.sqrt(((sens * c[:, None]) ** 2).sum(axis=0))
 
