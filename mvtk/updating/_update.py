@@ -23,6 +23,7 @@ from ..fe._model import FEModel
 from ..fe._solvers import eigsh_lowest
 from ._pairing import Pairing, classify_modes, pair_modes, target_mac, target_rows
 from ._parameters import Parameter, get_path, with_values
+from ._roundoff import without_roundoff
 from ._sensitivity import (
     check_difference,
     check_model,
@@ -202,7 +203,8 @@ class _Problem:
             v0 = None
         while True:   # more than once only while the rigid-body modes are being counted
             k = min(n + self.n_rigid, model.n_dof)
-            eig = self._elastic(eigsh_lowest(model.K, model.M, k, sigma=sigma, v0=v0))
+            eig = self._elastic(eigsh_lowest(without_roundoff(model.K), model.M, k,
+                                             sigma=sigma, v0=v0))
             if eig.omega2.size >= n or k == model.n_dof or k == n + self.n_rigid:
                 break
         if eig.omega2.size < len(self.targets):

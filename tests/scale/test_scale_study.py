@@ -45,10 +45,13 @@ def test_parameter_study_in_process_equals_direct_modal_analysis():
     assert STRIP["materials"]["al"]["E"] == 70e9  # the description is not modified
 
 
-def test_parameter_study_gives_modal_analysis_bit_for_bit_on_rebuilt_models():
+def test_parameter_study_gives_modal_analysis_frequencies_on_rebuilt_models():
     """The study solves samples after the first without modal_analysis' mode typing
-    (same eigen solve); on an elastic clamp (springs on the assembled pattern) and over
-    thickness, modulus and density scatter the frequencies are modal_analysis' exactly."""
+    and without K's round-off entries; on an elastic clamp and over thickness, modulus
+    and density scatter the frequencies are modal_analysis' to the eigen solver's
+    round-off: the dropped entries are below 1e-15 of the diagonal (the physical ones
+    above 1e-6), and a different factorisation order moves the first eigenvalue of this
+    thin strip by up to 5e-10 (measured)."""
     desc = copy.deepcopy(STRIP)
     desc["boundary"]["clamp_stiffness"] = 500.0
     rng = np.random.default_rng(11)
@@ -60,7 +63,7 @@ def test_parameter_study_gives_modal_analysis_bit_for_bit_on_rebuilt_models():
     for i in range(5):
         vals = {p: float(samples[p][i]) for p in samples}
         direct = mvtk.fe.modal_analysis(mvtk.fe.build_model(with_values(desc, vals)), 4)
-        np.testing.assert_array_equal(ds["fn_hz"].values[i], direct.fn_hz)
+        np.testing.assert_allclose(ds["fn_hz"].values[i], direct.fn_hz, rtol=2e-9)
 
 
 def test_parameter_study_of_a_free_structure_keeps_the_rigid_body_modes():
