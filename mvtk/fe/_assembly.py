@@ -215,25 +215,6 @@ def assemble_element_matrices(
     return sparsity_pattern(dofs, free_index, n_free).assemble(Ke)
 
 
-def _add_diagonal(K: sp.csr_matrix, d: np.ndarray) -> sp.csr_matrix:
-    """``K + diag(d)`` on K's own sparsity pattern when it stores every diagonal entry.
-
-    ``K + sp.diags(d)`` drops the entries that sum to exactly zero, and which ones do
-    depends on the values (round-off cancellation): the pattern of a rebuilt model with
-    new parameter values then differs, and every pattern-keyed cache downstream (the
-    fill-reducing ordering of :func:`mvtk.fe.factorize`) misses. Adding in place keeps
-    the assembled pattern, which depends on the mesh only.
-    """
-    n = K.shape[0]
-    rows = np.repeat(np.arange(n), np.diff(K.indptr))
-    diag = np.flatnonzero(K.indices == rows)
-    if len(diag) != n or not K.has_sorted_indices:
-        return (K + sp.diags(d)).tocsr()
-    out = K.copy()
-    out.data[diag] += d
-    return out
-
-
 def _unique_elements(xy: np.ndarray, section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Indices of geometrically distinct elements (shape relative to node 0 + section)
     and, for every element, the index of its representative."""
@@ -342,7 +323,7 @@ def assemble_shell_model(
             raise DimensionError(f"springs must have shape ({n_all},), got {k.shape}")
         if np.any(k < 0) or not np.all(np.isfinite(k)):
             raise ParameterError("spring stiffnesses must be finite and >= 0")
-        K = _add_diagonal(K, k[free])
+        K = K + sp.diags(k[free]).tocsr()
     meta = dict(meta or {})
     meta.setdefault("element_section", element_section)
     meta.setdefault("sections", tuple(sections))
