@@ -6,7 +6,8 @@ Prints
 - the wall and CPU time (this process plus its worker processes) of ``mvtk.study.run``
   on ``data/smart_beam/study.toml`` with an empty cache (cold, ``--repeats`` runs, each
   in a fresh folder; median) and again with every stage cached (warm), and their ratio;
-  the wall time of each stage of the first cold run. ``--serial`` also times cold runs
+  the wall and CPU time of each stage of the first cold run (a stage computed in a
+  worker process: the worker's own times). ``--serial`` also times cold runs
   with ``parallel=False`` (the Monte-Carlo stage in process) for comparison;
 - the time of :func:`mvtk.report.render_table` against the peer
   ``pandas.DataFrame.to_html`` on the same 5000-row table, and their ratio.
@@ -86,8 +87,9 @@ def main() -> None:
     print(f"smart-beam study, cold cache: median {cold:7.2f} s wall, {cold_cpu:.2f} s CPU "
           f"(runs: {', '.join(f'{w:.1f} s / {c:.1f} s' for w, c in zip(walls, cpus))}; "
           "target 10 s wall)")
-    print("  stages of the first run (wall; uncertainty in a worker process): "
-          + ", ".join(f"{k} {v:.1f} s" for k, v in res.timings_s.items()))
+    print("  stages of the first run, wall / CPU (ingest and uncertainty in worker "
+          "processes): " + ", ".join(f"{k} {v:.1f} / {res.cpu_s.get(k, float('nan')):.1f} s"
+                                     for k, v in res.timings_s.items()))
     print(f"smart-beam study, warm cache: {warm:7.2f} s  (ratio warm/cold {warm / cold:.3f})")
     serial = {}
     if args.serial:
@@ -108,7 +110,8 @@ def main() -> None:
         "figures": {"cold_s": cold, "cold_cpu_s": cold_cpu, "warm_s": warm,
                     "target_cold_s": 10.0, "cold_runs_s": walls, "cold_runs_cpu_s": cpus,
                     **serial,
-                    "stages_s": dict(res.timings_s), "render_table_5000_s": t_mvtk},
+                    "stages_s": dict(res.timings_s), "stages_cpu_s": dict(res.cpu_s),
+                    "render_table_5000_s": t_mvtk},
         "peer": "pandas.DataFrame.to_html (table rendering)",
         "ratios": {"render_table_pandas_over_mvtk": t_pandas / t_mvtk}})
 

@@ -271,6 +271,9 @@ def _sampled(law: FeedbackLaw, Bx, Su, E, X0, n_t: int, dt: float, k: int) -> np
                 f"(sampled loop spectral radius {rho:.4f} >= 1); increase boundary_layer "
                 "or control_rate_hz, or use method='LSODA'"
             )
+    regimes = _regimes(law)
+    if E is None and regimes is not None:
+        return _sampled_regimes(Phi, gu, srow, regimes, X0, n_t, k)
     u_of = law.u_scalar
     X = np.empty((n_t, N))
     X[0] = X0
@@ -285,6 +288,84 @@ def _sampled(law: FeedbackLaw, Bx, Su, E, X0, n_t: int, dt: float, k: int) -> np
             if forced is not None:
                 x += forced[i]
         X[i + 1] = x
+    return X
+
+
+def _regimes(law: FeedbackLaw):
+    """Pieces of a piecewise-affine law ``u = a s + b``: ``((lo, hi), ((a, b), ...))``
+    with piece 0 for ``s < lo``, 1 for ``lo <= s <= hi``, 2 for ``s > hi``; None for a
+    law that is not piecewise affine (the tanh layer)."""
+    if law.kind == "linear":
+        return (-np.inf, np.inf), ((0.0, 0.0), (1.0, 0.0), (0.0, 0.0))
+    if law.kind == "saturated":
+        u = float(law.u_max)
+        return (-u, u), ((0.0, -u), (1.0, 0.0), (0.0, u))
+    if law.kind == "switching" and law.layer == "sat":
+        u, eps = float(law.u_max), float(law.boundary_layer)
+        return (-eps, eps), ((0.0, u), (-u / eps, 0.0), (0.0, -u))
+    return None
+
+
+def _sampled_regimes(Phi, gu, srow, regimes, X0, n_t: int, k: int,
+                     max_block: int = 2048) -> np.ndarray:
+    """:func:`_sampled` without exogenous inputs for a piecewise-affine law.
+
+    While the switching argument ``s = srow x`` stays in one piece ``u = a s + b`` of the
+    law, the held-command recursion ``x+ = Phi x + gu u(s)`` is the affine recursion
+    ``x+ = A x + c`` (``A = Phi + a gu srow``, ``c = b gu``), whose states after ``j``
+    steps are ``A^j x + C_j`` (powers and offsets precomputed once per piece). A block
+    of steps is marched at once; the first step whose ``s`` leaves the piece ends the
+    block, and the march restarts there in the new piece. The states are those of the
+    step-by-step loop up to round-off (a product of powers instead of a chain of
+    products), without one Python iteration per control step.
+    """
+    N = X0.size
+    steps = (n_t - 1) * k
+    L = max(1, min(max_block, steps))
+    (lo, hi), pieces = regimes
+    tables = {}
+
+    def table(r):
+        if r not in tables:
+            a, b = pieces[r]
+            A = Phi + a * np.outer(gu, srow)
+            c = b * gu
+            P = np.empty((L + 1, N, N))
+            C = np.empty((L + 1, N))
+            P[0] = np.eye(N)
+            C[0] = 0.0
+            for j in range(L):
+                P[j + 1] = A @ P[j]
+                C[j + 1] = A @ C[j] + c
+            tables[r] = (P, C, srow @ P, C @ srow)   # s_j = SP[j] x + sC[j]
+        return tables[r]
+
+    def piece(sv):
+        return np.where(sv < lo, 0, np.where(sv > hi, 2, 1))
+
+    X = np.empty((n_t, N))
+    X[0] = X0
+    x = np.array(X0, dtype=float)
+    g = 0                                   # control steps done
+    r = int(piece(float(srow @ x)))
+    span = 16                               # steps checked at once (adapts)
+    while g < steps:
+        P, C, SP, sC = table(r)
+        m = min(span, L, steps - g)
+        sv = SP[1:m + 1] @ x + sC[1:m + 1]  # s of the states 1..m steps ahead
+        left = np.flatnonzero(piece(sv) != r)
+        j = int(left[0]) + 1 if left.size else m   # states 1..j are exact
+        first = -(-(g + 1) // k) * k             # output samples among g+1..g+j
+        out = np.arange(first, g + j + 1, k)
+        if out.size:
+            X[out // k] = np.einsum("jab,b->ja", P[out - g], x) + C[out - g]
+        x = P[j] @ x + C[j]
+        g += j
+        if left.size:
+            r = int(piece(sv[j - 1]))
+            span = max(16, 2 * j)
+        else:
+            span = min(2 * span, L)
     return X
 
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import DimensionError, ParameterError
 from ..fe import FEModel, eigsh_lowest
 from ._craig_bampton import SuperElement, _translation, craig_bampton
 
@@ -99,6 +99,7 @@ def effective_mass(
     n_modes: int = 20,
     *,
     base=None,
+    modes=None,
 ) -> EffectiveMassTable:
     """Effective mass table for a unit base translation in ``direction``.
 
@@ -117,6 +118,10 @@ def effective_mass(
         (e.g. the clamp of a free-free model). The modes are then the fixed-interface
         modes with this base held, i.e. ``effective_mass(craig_bampton(model, base,
         n_modes))``.
+    modes : ModalResult or EigenSolution, optional
+        FEModel only: the model's lowest modes already computed
+        (:func:`mvtk.fe.modal_analysis` or :func:`mvtk.fe.eigsh_lowest` of this model,
+        mass-normalised), used instead of solving again; their number is ``n_modes``.
 
     Returns
     -------
@@ -134,6 +139,8 @@ def effective_mass(
     model the fractions sum to 1; for fixed-interface modes they sum to less than 1 (the
     rest is the boundary's residual mass).
     """
+    if modes is not None and (base is not None or not isinstance(model_or_se, FEModel)):
+        raise ParameterError("modes= applies to an FEModel without base=")
     if base is not None:
         if not isinstance(model_or_se, FEModel):
             raise ParameterError("base= applies to an FEModel, not to a SuperElement")
@@ -154,12 +161,20 @@ def effective_mass(
         r = _translation(model, direction)
         mr = model.M @ r
         total = float(r @ mr)
-        n_modes = int(n_modes)
-        if not 1 <= n_modes <= model.n_dof:
-            raise ParameterError(f"n_modes must be in 1..{model.n_dof}, got {n_modes}")
-        sol = eigsh_lowest(model.K, model.M, n_modes)
-        L = sol.vectors.T @ mr
-        fn = np.sqrt(np.clip(sol.omega2, 0, None)) / (2 * np.pi)
+        if modes is not None:
+            w2 = np.asarray(modes.omega2, dtype=float)
+            vectors = np.asarray(modes.shapes if hasattr(modes, "shapes") else modes.vectors)
+            if vectors.ndim != 2 or vectors.shape != (model.n_dof, w2.size):
+                raise DimensionError(f"modes: expected {model.n_dof} x {w2.size} shapes of "
+                                     f"this model, got {vectors.shape}")
+        else:
+            n_modes = int(n_modes)
+            if not 1 <= n_modes <= model.n_dof:
+                raise ParameterError(f"n_modes must be in 1..{model.n_dof}, got {n_modes}")
+            sol = eigsh_lowest(model.K, model.M, n_modes)
+            w2, vectors = sol.omega2, sol.vectors
+        L = vectors.T @ mr
+        fn = np.sqrt(np.clip(w2, 0, None)) / (2 * np.pi)
         kind = "fixed_base"
     else:
         raise ParameterError(

@@ -115,6 +115,9 @@ class StudyResult:
         Stages loaded from the cache instead of being computed.
     timings_s : dict of str to float
         Wall time per stage (s).
+    cpu_s : dict of str to float
+        CPU time (``time.process_time``) per stage (s): of the main process, or of the
+        worker process for a stage computed in one.
     """
 
     study: Study
@@ -126,6 +129,7 @@ class StudyResult:
     failed: dict[str, str] = field(default_factory=dict)
     cache_hits: tuple[str, ...] = ()
     timings_s: dict[str, float] = field(default_factory=dict)
+    cpu_s: dict[str, float] = field(default_factory=dict)
 
     @property
     def ok(self) -> bool:
@@ -378,6 +382,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
     unavailable: dict[str, str] = {}
     failed: dict[str, str] = {}
     timings: dict[str, float] = {}
+    cpu: dict[str, float] = {}
     cfg = study.config
     selected = stages_for(cfg, STAGE_NEEDS if stages is None else stages)
     report = report and stages is None
@@ -418,7 +423,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
             return
         check_interrupt()
         bar.set_postfix_str(name)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         try:
             key, why = key_of(name)
             if key is None:
@@ -454,8 +459,10 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
                 arrays[name] = ds
         finally:
             timings[name] = time.perf_counter() - t0
+            cpu[name] = time.process_time() - c0
             if name in background and math.isfinite(background[name].wall_s):
                 timings[name] = background[name].wall_s   # its own time, in parallel
+                cpu[name] = background[name].cpu_s
             if name in selected:
                 bar.update(1)
 
@@ -524,8 +531,9 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         blas.__exit__(None, None, None)
 
     timings = {s: timings[s] for s in STAGES if s in timings}
+    cpu = {s: cpu[s] for s in STAGES if s in cpu}
     report_path = None
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     if report:
         from ._report import build_report
 
@@ -535,9 +543,10 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
                               timings_s=dict(timings))
         report_path = build_report(partial, hashes)
     timings["report"] = time.perf_counter() - t0
+    cpu["report"] = time.process_time() - c0
     if report:
         bar.update(1)
     bar.close()
     return StudyResult(study=study, out_dir=out, report_path=report_path, results=results,
                        arrays=arrays, unavailable=unavailable, failed=failed,
-                       cache_hits=tuple(cache.hits), timings_s=timings)
+                       cache_hits=tuple(cache.hits), timings_s=timings, cpu_s=cpu)

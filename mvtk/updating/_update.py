@@ -23,6 +23,7 @@ from ..fe._model import FEModel
 from ..fe._solvers import eigsh_lowest
 from ._pairing import Pairing, classify_modes, pair_modes, target_mac, target_rows
 from ._parameters import Parameter, get_path, with_values
+from ._roundoff import without_roundoff
 from ._sensitivity import (
     check_difference,
     check_model,
@@ -200,9 +201,14 @@ class _Problem:
         v0 = self._vectors
         if v0 is not None and v0.shape[0] != model.n_dof:
             v0 = None
+        # after a first solve without rigid-body modes, K without its round-off entries
+        # (faster factorisation, one ordering for every evaluation); a free-free model
+        # keeps them: its rigid-body null space rests on their exact cancellation
+        K = (without_roundoff(model.K) if self._lowest is not None and self.n_rigid == 0
+             else model.K)
         while True:   # more than once only while the rigid-body modes are being counted
             k = min(n + self.n_rigid, model.n_dof)
-            eig = self._elastic(eigsh_lowest(model.K, model.M, k, sigma=sigma, v0=v0))
+            eig = self._elastic(eigsh_lowest(K, model.M, k, sigma=sigma, v0=v0))
             if eig.omega2.size >= n or k == model.n_dof or k == n + self.n_rigid:
                 break
         if eig.omega2.size < len(self.targets):

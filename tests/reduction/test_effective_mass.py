@@ -45,6 +45,27 @@ def test_fixed_base_fractions_match_closed_form():
     np.testing.assert_allclose(table.cumulative, np.cumsum(table.fraction))
 
 
+def test_given_modes_give_the_table_of_a_fresh_solve():
+    """modes= (a modal_analysis or eigsh_lowest result of the model) replaces the solve:
+    the same table, and the closed form still holds; wrong shapes are refused."""
+    from mvtk.errors import DimensionError
+    from mvtk.fe import eigsh_lowest, modal_analysis
+
+    model = eb_beam_xz(n_el=60)
+    ref = effective_mass(model, "uz", n_modes=6)
+    for modes in (modal_analysis(model, 6), eigsh_lowest(model.K, model.M, 6)):
+        got = effective_mass(model, "uz", modes=modes)
+        np.testing.assert_allclose(got.fn_hz, ref.fn_hz, rtol=1e-12)
+        np.testing.assert_allclose(got.effective_mass_kg, ref.effective_mass_kg, rtol=1e-9)
+        frac = got.effective_mass_kg[:4] / model.meta["mass_kg"]
+        np.testing.assert_allclose(frac, cantilever_fractions(), rtol=2e-3)
+    other = eb_beam_xz(n_el=30)
+    with pytest.raises(DimensionError, match="shapes of this model"):
+        effective_mass(model, "uz", modes=modal_analysis(other, 6))
+    with pytest.raises(ParameterError, match="modes= applies"):
+        effective_mass(model, "uz", base=["clamp"], modes=ref)
+
+
 def test_all_modes_sum_to_total_mass():
     model = eb_beam_xz(n_el=20)
     table = effective_mass(model, "uz", n_modes=model.n_dof)
