@@ -47,7 +47,8 @@ class _LowestFrequencies:
     """Lowest natural frequencies of models that differ only in parameter values.
 
     The first model goes through :func:`mvtk.fe.modal_analysis` (rigid-body detection
-    and all). When it has no rigid-body mode, later models are solved by the
+    and all). When it has no rigid-body mode, every model (the first one again, so that
+    a sample's result does not depend on where a batch starts) is solved by the
     :func:`mvtk.fe.eigsh_lowest` call that ``modal_analysis`` makes (shift 0 for a
     non-singular K, the same start vector) on K without its round-off entries
     (:func:`mvtk.updating._roundoff.without_roundoff`: half the factorisation time of
@@ -76,7 +77,10 @@ class _LowestFrequencies:
             w2 = np.asarray(res.omega2, dtype=float)
             self.fast = bool(self.n_modes >= 2 and not np.any(res.rigid)
                              and w2.min() > 0 and w2.min() >= 1e-4 * w2.max())
-            return np.asarray(res.fn_hz, dtype=float)
+            if not self.fast:
+                return np.asarray(res.fn_hz, dtype=float)
+            # the first model is solved again on the fast path, so that every sample
+            # gets the same arithmetic whichever sample starts a batch or a worker
         if self.fast:
             try:
                 sol = eigsh_lowest(without_roundoff(model.K), model.M, self.n_modes,
