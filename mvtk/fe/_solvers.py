@@ -613,17 +613,8 @@ class EigenSolution:
     method: str = ""
 
 
-def _start_vector(ndof: int, v0, M) -> np.ndarray:
-    """Deterministic Lanczos start vector, or one built from previous eigenvectors.
-
-    Without ``v0``: a fixed pseudo-random vector (seed 0), so the solve count and the
-    result do not change from run to run. With previous eigenvectors ``V`` (n_dof, k):
-    ``sum_j V_j / ||V_j||_M`` plus 1e-4 of the fixed vector, which keeps a component along
-    every mode (a mode of the new model missing from ``V`` is still found; tested).
-    """
-    base = np.random.default_rng(0).standard_normal(ndof)
-    if v0 is None:
-        return base
+def _previous_vectors(ndof: int, v0, M) -> np.ndarray:
+    """Previous eigenvectors ``v0`` checked and M-normalised, shape (n_dof, k)."""
     V = np.asarray(v0, dtype=float)
     if V.ndim == 1:
         V = V[:, None]
@@ -636,7 +627,21 @@ def _start_vector(ndof: int, v0, M) -> np.ndarray:
         raise ParameterError("v0 contains non-finite values")
     norms = np.sqrt(np.abs(np.einsum("ij,ij->j", V, M @ V)))
     norms[norms == 0] = 1.0
-    x = (V / norms).sum(axis=1)
+    return V / norms
+
+
+def _start_vector(ndof: int, v0, M) -> np.ndarray:
+    """Deterministic Lanczos start vector, or one built from previous eigenvectors.
+
+    Without ``v0``: a fixed pseudo-random vector (seed 0), so the solve count and the
+    result do not change from run to run. With previous eigenvectors ``V`` (n_dof, k):
+    ``sum_j V_j / ||V_j||_M`` plus 1e-4 of the fixed vector, which keeps a component along
+    every mode (a mode of the new model missing from ``V`` is still found; tested).
+    """
+    base = np.random.default_rng(0).standard_normal(ndof)
+    if v0 is None:
+        return base
+    x = _previous_vectors(ndof, v0, M).sum(axis=1)
     nx = math.sqrt(abs(float(x @ (M @ x)))) or 1.0
     nb = math.sqrt(abs(float(base @ (M @ base)))) or 1.0
     return x / nx + 1e-4 * base / nb
@@ -649,19 +654,7 @@ def _start_block(ndof: int, v0, M, width: int, seed: int = 0) -> np.ndarray:
     base = np.random.default_rng(seed).standard_normal((ndof, width))
     if v0 is None:
         return base
-    V = np.asarray(v0, dtype=float)
-    if V.ndim == 1:
-        V = V[:, None]
-    if V.ndim != 2 or V.shape[0] != ndof:
-        raise DimensionError(
-            f"v0 must have shape ({ndof},) or ({ndof}, k) (previous eigenvectors), got "
-            f"{np.shape(v0)}"
-        )
-    if not np.all(np.isfinite(V)):
-        raise ParameterError("v0 contains non-finite values")
-    norms = np.sqrt(np.abs(np.einsum("ij,ij->j", V, M @ V)))
-    norms[norms == 0] = 1.0
-    V = V / norms
+    V = _previous_vectors(ndof, v0, M)
     if V.shape[1] > width:
         # column j of the block: sum of the previous vectors j, j + width, ...
         V = np.column_stack([V[:, j::width].sum(axis=1) for j in range(width)])
