@@ -249,14 +249,17 @@ def run(
 
 
 #: Stages computed in a forked worker process while the main process runs other stages:
-#: ``ingest`` (only ``damping`` needs it) beside ``modal``, ``fe`` and ``updating``;
-#: ``uncertainty`` (only the report needs it) beside ``correlation`` to ``control``.
-_BACKGROUND = ("ingest", "uncertainty")
+#: ``ingest`` (only ``damping`` needs it) and ``fe`` (the nominal model; ``updating``
+#: does not need it) beside ``modal`` and ``updating``; ``uncertainty`` and
+#: ``correlation`` (only the report needs them) beside ``damping`` to ``control``.
+_BACKGROUND = ("ingest", "fe", "uncertainty", "correlation")
 #: Modules a worker stage imports that the main process needs later too (the modal
 #: stage reads with mvtk.io, the report plots with mvtk.scale): imported before the fork,
 #: so the import is paid once, not in the worker and again in the main process.
 _PRELOAD = {"ingest": ("mvtk.io", "mvtk.signal", "mvtk.damping"),
-            "uncertainty": ("mvtk.scale", "mvtk.updating")}
+            "fe": ("mvtk.fe",),
+            "uncertainty": ("mvtk.scale", "mvtk.updating"),
+            "correlation": ("mvtk.correlation", "mvtk.plot", "matplotlib.pyplot")}
 
 
 class _ChildError(Exception):
@@ -482,9 +485,13 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         start("ingest", st.ingest)
         if "ingest" not in background:
             do("ingest", st.ingest)
+        start("fe", st.fe_nominal)
+        if "fe" not in background:
+            do("fe", st.fe_nominal)
         do("modal", _ema.modal)
-        do("fe", st.fe_nominal)
         do("updating", lambda s: st.updating(s, arrays.get("modal")))
+        if "fe" in background:
+            do("fe", st.fe_nominal)
 
         def _description(s: TrackedStudy) -> dict:
             """The updated structure when updating ran, else the nominal one."""
@@ -495,12 +502,16 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         def _uncertainty(s: TrackedStudy):
             return st.uncertainty(s, _description(s))
 
-        start("uncertainty", _uncertainty)
-
         # the identified shapes against the updated model: MAC, COMAC, non-target predictions
-        do("correlation", lambda s: _ema.correlation(
-            s, arrays["modal"], _description(s), len(results["fe"]["fn_hz"]),
-            results.get("updating", {}).get("targets_hz")))
+        def _correlation(s: TrackedStudy):
+            return _ema.correlation(s, arrays["modal"], _description(s),
+                                    len(results["fe"]["fn_hz"]),
+                                    results.get("updating", {}).get("targets_hz"))
+
+        start("uncertainty", _uncertainty)
+        start("correlation", _correlation)
+        if "correlation" not in background:
+            do("correlation", _correlation)
 
         # Monte Carlo on the updated structure; no later stage depends on it (when it
         # runs in the worker process, its result is collected after the control stage)
@@ -522,6 +533,8 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
             return st.control(s, arrays["reduction"], float(fn1))
 
         do("control", _control)
+        if "correlation" in background:
+            do("correlation", _correlation)
         if "uncertainty" in background:
             do("uncertainty", _uncertainty)
 
