@@ -520,7 +520,13 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         if "ingest" in background:
             do("ingest", st.ingest)
         # damping pairs identified modes with the (updated) FE model's effective masses
-        do("damping", lambda s: st.damping(s, arrays["ingest"], _description(s)))
+        def _known_fn_hz():
+            """Lowest frequencies (Hz) of the updated model, else of the nominal one."""
+            f = results.get("updating", {}).get("fn_hz")
+            return results.get("fe", {}).get("fn_hz") if f is None else f
+
+        do("damping", lambda s: st.damping(s, arrays["ingest"], _description(s),
+                                           _known_fn_hz()))
         # the SE is built from the updated model when updating ran, else from the nominal one
         do("reduction", lambda s: st.reduction(
             s, _description(s), results.get("damping", {}).get("model_damping")))

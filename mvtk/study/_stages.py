@@ -123,22 +123,39 @@ def _impact_half_power(arrays, test: str, m: dict, fn_guess: list[float], method
     return fr, hp, _warning_messages(caught)
 
 
-def _paired_mass_fractions(description: dict, fn_hz: np.ndarray) -> dict:
+def _modes_to_cover(f_top: float, known_fn_hz=None) -> int:
+    """Number of FE modes expected below ``f_top`` (Hz), with a margin, in 8..30.
+
+    From known frequencies of (nearly) the same model: their count scaled linearly to
+    ``f_top`` (a plate's modal density is constant, a beam's falls with frequency, so
+    linear scaling over-counts rather than under-counts), plus 3.
+    """
+    f = np.asarray(known_fn_hz if known_fn_hz is not None else [], dtype=float)
+    f = f[np.isfinite(f) & (f > 0)]
+    if not f.size:
+        return 8
+    return int(np.clip(np.ceil(f.size * f_top / f.max()) + 3, 8, 30))
+
+
+def _paired_mass_fractions(description: dict, fn_hz: np.ndarray, known_fn_hz=None) -> dict:
     """Effective mass fraction (uz) of the FE mode nearest to each identified mode.
 
     The FE model of ``description`` (the updated one when updating ran) is solved for
-    enough modes to cover 1.3 times the highest identified frequency (at most 30).
+    enough modes to cover 1.3 times the highest identified frequency (at most 30); the
+    count is estimated from ``known_fn_hz`` (lowest frequencies of the model, Hz), so
+    one solve usually suffices, and raised by 8 until the modes cover it.
     """
     from ..fe import build_model
     from ..reduction import effective_mass
 
     model = build_model(description)
-    n = 8
+    f_top = 1.3 * float(np.max(fn_hz))
+    n = _modes_to_cover(f_top, known_fn_hz)
     while True:
         em = effective_mass(model, "uz", n_modes=n)
-        if em.fn_hz[-1] >= 1.3 * float(np.max(fn_hz)) or n >= 30:
+        if em.fn_hz[-1] >= f_top or n >= 30:
             break
-        n += 8
+        n = min(30, n + 8)
     fe_fn = np.asarray(em.fn_hz, dtype=float)
     idx = [int(np.argmin(np.abs(fe_fn - f))) for f in fn_hz]
     return {"fe_mode": [i + 1 for i in idx], "fe_fn_hz": fe_fn[idx].tolist(),
@@ -148,7 +165,7 @@ def _paired_mass_fractions(description: dict, fn_hz: np.ndarray) -> dict:
             "fe_fn_hz_all": fe_fn.tolist()}
 
 
-def damping(study: Study, arrays, description: dict):
+def damping(study: Study, arrays, description: dict, known_fn_hz=None):
     """Half-power on the impact FRFs, envelope fit on the free decay, Rayleigh fits.
 
     Modes ``damping.fn_hz`` come from the long impact test (fine frequency resolution),
@@ -156,6 +173,8 @@ def damping(study: Study, arrays, description: dict):
     paper's two-mode fit of modes 1 and 2 ("half-power"), the least-squares fit over all
     identified modes, and the Chowdhury pair (anchors by the effective mass of the FE
     modes of ``description`` paired with the identified ones by frequency).
+    ``known_fn_hz`` (Hz): the lowest frequencies of that model from an earlier stage,
+    used only to size its eigen solve.
     """
     import xarray as xr
 
@@ -213,7 +232,7 @@ def damping(study: Study, arrays, description: dict):
         # Chowdhury: anchors by effective mass of the paired (updated) FE modes
         target = float(cfg.get("chowdhury_target_mass", 0.95))
         try:
-            pair = _paired_mass_fractions(description, fn_hp[ok])
+            pair = _paired_mass_fractions(description, fn_hp[ok], known_fn_hz)
             frac = np.asarray(pair["mass_fraction"])
             reached = float(np.sum(frac))
             used, note = target, ""
