@@ -334,9 +334,16 @@ def _sampled_regimes(Phi, gu, srow, regimes, X0, n_t: int, k: int,
             C = np.empty((L + 1, N))
             P[0] = np.eye(N)
             C[0] = 0.0
-            for j in range(L):
-                P[j + 1] = A @ P[j]
-                C[j + 1] = A @ C[j] + c
+            P[1] = A
+            C[1] = c
+            m = 1
+            # doubling: A^(m+i) = A^m A^i and C_(m+i) = A^i C_m + C_i (C_j = sum_{l<j}
+            # A^l c) fill 1..2m from 1..m in one batched product, log2(L) products
+            while m < L:
+                q = min(m, L - m)
+                P[m + 1:m + q + 1] = P[m] @ P[1:q + 1]
+                C[m + 1:m + q + 1] = P[1:q + 1] @ C[m] + C[1:q + 1]
+                m += q
             tables[r] = (P, C, srow @ P, C @ srow)   # s_j = SP[j] x + sC[j]
         return tables[r]
 
