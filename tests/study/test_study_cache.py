@@ -136,6 +136,31 @@ def test_damaged_entry_recomputed_with_a_warning_naming_it(tmp_path, damage, whi
     assert again.hits == ["stage"] and calls == [1]
 
 
+@pytest.mark.parametrize(("ds", "magic"), [
+    # netCDF3 holds these exactly (int64 within int32, unicode, names with spaces)
+    (xr.Dataset({"a b": ("x", np.arange(3, dtype=np.int64)),
+                 "label": ("x", ["\u00b5m", "", "\u03a9 long label"])},
+                coords={"x": np.array([10, 20, 30]), "node": ("x", np.array([4, 5, 6]))}),
+     b"CDF"),
+    # and not these: the HDF5 (netCDF4) file keeps them
+    (xr.Dataset({"h": ("f", np.array([1 + 2j, 3 - 1j]))}), b"\x89HD"),
+    (xr.Dataset({"n": ("x", np.array([1, 2**40]))}), b"\x89HD"),
+    (xr.Dataset({"ok": ("x", np.array([True, False]))}), b"\x89HD"),
+])
+def test_arrays_round_trip_exactly_in_either_file_format(tmp_path, ds, magic):
+    """The cache writes small netCDF3-safe datasets as netCDF3 (about 10x faster than
+    HDF5) and restores the dtypes netCDF3 changes; everything else as netCDF4."""
+    StageCache(tmp_path).get("stage", "k", lambda: ({"x": 1}, ds))
+    assert (tmp_path / "stage.nc").read_bytes()[:len(magic)] == magic
+    cache = StageCache(tmp_path)
+    _, back = cache.get("stage", "k", lambda: pytest.fail("recomputed"))
+    assert cache.hits == ["stage"]
+    assert back.identical(ds)
+    for name, var in ds.variables.items():
+        assert back[name].dtype == var.dtype, name
+    assert set(back.coords) == set(ds.coords)
+
+
 def test_result_tampering_is_detected(tmp_path):
     cache = StageCache(tmp_path)
     cache.get("stage", "k", lambda: ({"x": 1.5}, None))

@@ -145,6 +145,24 @@ def test_code_hash_follows_the_source():
     assert _cache.code_hash("fe") != _cache.code_hash("fe", "study/_stages.py")
 
 
+def test_source_digest_is_reread_when_the_file_changes(tmp_path):
+    """code_hash keeps each file's digest while its (mtime, size, inode) is unchanged."""
+    import hashlib
+    import os
+
+    from mvtk.study import _cache
+
+    f = tmp_path / "stage.py"
+    f.write_text("x = 1\n")
+    assert _cache._source_digest(f) == hashlib.sha256(b"x = 1\n").digest()
+    st = f.stat()
+    f.write_text("x = 2\n")                      # same size: the mtime tells
+    os.utime(f, ns=(st.st_atime_ns, st.st_mtime_ns + 10**9))
+    assert _cache._source_digest(f) == hashlib.sha256(b"x = 2\n").digest()
+    assert _cache._source_digest(tmp_path / "missing.py") is None
+    assert _cache._source_digest(tmp_path) is None
+
+
 def test_broadband_modes_need_the_broadband_test(tmp_path):
     p = _variant(tmp_path, "[measurements.broadband]", "[measurements.broadband]")
     text = p.read_text()
