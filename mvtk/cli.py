@@ -31,7 +31,7 @@ import sys
 import warnings
 
 from . import __version__
-from ._interrupt import check_interrupt, interrupt_latch
+from ._interrupt import check_interrupt, forget_unhandled_interrupt, interrupt_latch
 from .errors import MvtkError
 
 #: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
@@ -104,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
         parser = build_parser()
         args = parser.parse_args(argv)
     except KeyboardInterrupt:  # during start-up (imports)
+        forget_unhandled_interrupt()
         print("mvtk: interrupted", file=sys.stderr)
         return 130
     if args.command is None:
@@ -116,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
             check_interrupt()  # received, but swallowed where Python cannot raise it
         return status
     except KeyboardInterrupt:
+        forget_unhandled_interrupt()
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     except MvtkError as err:

@@ -60,3 +60,31 @@ def test_latch_raises_an_interrupt_that_was_swallowed():
             os.kill(os.getpid(), signal.SIGINT)
     check_interrupt()  # cleared when the latch ends
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
+def test_interrupt_inside_exec_code_still_exits_130(tmp_path):
+    """A Ctrl-C that lands in code run from a string (exec: dataclasses, namedtuples
+    during a lazy import) made CPython end ``python -m mvtk ...`` by SIGINT (-2) after
+    the command had handled it and printed "interrupted" (1 run in 8 of ``mvtk run``)."""
+    import subprocess
+    import sys
+    import textwrap
+
+    (tmp_path / "ki_probe.py").write_text(textwrap.dedent("""
+        import sys
+        import mvtk.cli as cli
+        import mvtk.fe._cli as fe_cli
+
+        def interrupted_in_exec(args):
+            exec("import os, signal\\nos.kill(os.getpid(), signal.SIGINT)\\n"
+                 "for _ in range(10000): pass")
+
+        fe_cli.run = interrupted_in_exec
+        sys.exit(cli.main(["modes", "unused.toml"]))
+    """))
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(tmp_path), *[p for p in sys.path if p]]))
+    proc = subprocess.run([sys.executable, "-m", "ki_probe"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.stderr.strip().splitlines()[-1] == "mvtk modes: interrupted", proc.stderr
+    assert proc.returncode == 130, proc.stderr
