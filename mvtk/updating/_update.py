@@ -1006,7 +1006,8 @@ def update(
         same dK/dp, dM/dp as the eigenvalue derivatives: no extra eigen solve) or
         ``"fd"`` (one extra eigen solve per parameter, mode followed by M-overlap).
     max_iter : int
-        Maximum number of residual evaluations (``max_nfev`` of least_squares).
+        Maximum number of residual evaluations (``max_nfev`` of least_squares; with
+        ``reduced_basis``: of each reduced fit, whose evaluations cost no eigen solve).
     mode_classifier : callable, optional
         ``f(model, vectors) -> labels`` used for kind checks; default
         :func:`classify_modes`.
@@ -1044,16 +1045,19 @@ def update(
         mode-shape residuals (``mac_weight = eigvec_weight = 0``; MAC pairing is fine):
         the basis holds the full modes at the initial values, the fit runs on the
         projected ``V'K(p)V``, ``V'M(p)V``, then ONE full eigen solve at the reduced
-        optimum checks it and its modes join the basis; the rounds repeat until a
-        round started at the last full solution no longer moves (scaled step below
-        1e-8, see :mod:`mvtk.updating._reduced`), so the result is a stationary point
-        of the full problem and every reported quantity (frequencies, shapes,
-        Jacobian, diagnostics) comes from the full model at the final values.
-        ``meta["reduced_basis"]`` gives the rounds, the full eigen solves and the
-        reduced-vs-full frequency mismatch at the final values; history entries of
-        the reduced model have ``model="reduced"``. None (default): on whenever it
-        applies; False: every evaluation on the full model; True: required (a
-        ParameterError if it does not apply).
+        optimum checks it and its modes join the basis; the rounds repeat until the
+        full model's own Gauss-Newton step at the last full solution is below 1e-8
+        (scaled variables; see :mod:`mvtk.updating._reduced`), so the result is a
+        stationary point of the full problem and every reported quantity
+        (frequencies, shapes, Jacobian, diagnostics) comes from the full model at the
+        final values. ``meta["reduced_basis"]`` gives the rounds, the full eigen
+        solves (``n_full_eigen``; ``timing["n_eigen"]`` counts all), the reduced-vs-full
+        frequency mismatch at the final values (``mismatch``) and that Gauss-Newton
+        step; history entries of the reduced model have ``model="reduced"``. The
+        affine check then uses Rayleigh quotients of the final modes on the real build
+        (no further eigen solve; ``meta["reduced_basis"]["affine_check"]``). None
+        (default): on whenever it applies; False: every evaluation on the full model,
+        as before; True: required (a ParameterError if it does not apply).
     xtol, ftol : float
         Stopping tolerances of least_squares.
 
