@@ -205,6 +205,10 @@ STEP_TOL = 1e-8
 MAX_ROUNDS = 8
 #: Gauss-Newton iterations on the reduced model after its trust-region fit.
 POLISH_STEPS = 8
+#: After the first round, a full Gauss-Newton step below this (scaled variables) means
+#: the reduced model (exact in value and slope there) is solved by Gauss-Newton steps
+#: alone, without a trust-region fit.
+NEAR = 1e-3
 
 
 def gauss_newton_step(J: np.ndarray, r: np.ndarray, x: np.ndarray, lb: np.ndarray,
@@ -331,14 +335,17 @@ def reduced_fit(prob, st0, lb, ub, *, max_iter: int, xtol: float, ftol: float, m
             basis.extend(static_derivatives(base.K, base.M, st0.omega2, st0.vectors, dK, dM))
         prob.use_basis(basis)
         h0 = len(prob.history)
-        try:
-            sol = least_squares(
-                prob.residual, x, jac=prob.jacobian, bounds=(lb, ub), method="trf",
-                x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12)
-            x_r, status, message = sol.x, int(sol.status), str(sol.message)
-        except matched:
-            x_r, status = prob._cache.x.copy(), 5
-            message = f"every relative frequency error is below freq_tol = {freq_tol:g}"
+        if info.rounds and info.gauss_newton_step <= NEAR:
+            x_r = x          # near the optimum: Gauss-Newton steps alone
+        else:
+            try:
+                sol = least_squares(
+                    prob.residual, x, jac=prob.jacobian, bounds=(lb, ub), method="trf",
+                    x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12)
+                x_r, status, message = sol.x, int(sol.status), str(sol.message)
+            except matched:
+                x_r, status = prob._cache.x.copy(), 5
+                message = f"every relative frequency error is below freq_tol = {freq_tol:g}"
         if status != 5:
             # Gauss-Newton on the reduced model down to a tenth of the tolerance
             for _ in range(POLISH_STEPS):
