@@ -851,6 +851,13 @@ class UpdateResult:
                 return clean(v.item())
             return v
 
+        def deep(v):
+            if isinstance(v, dict):
+                return {k: deep(x) for k, x in v.items()}
+            if isinstance(v, list | tuple):
+                return [deep(x) for x in v]
+            return clean(v)
+
         def records(df):
             df = df.reset_index()
             return [{k: clean(v) for k, v in row.items()} for row in df.to_dict("records")]
@@ -875,6 +882,7 @@ class UpdateResult:
             "swaps": list(self.swaps),
             "timing": {k: clean(v) for k, v in self.timing.items()},
             "updated_values": {p.path: float(v) for p, v in zip(self.parameters, self.values)},
+            "reduced_basis": deep(self.meta.get("reduced_basis", {"used": False})),
         }
 
 

@@ -13,6 +13,7 @@ updated in the steel modulus and an elastic clamp stiffness, as the smart-beam s
 from __future__ import annotations
 
 import copy
+import json
 import tomllib
 import warnings
 from pathlib import Path
@@ -78,6 +79,8 @@ def test_reduced_path_reaches_the_full_path_optimum(beam):
                                rtol=1e-8)
     models = red.to_dataframe("history")["model"]
     assert set(models) == {"full", "reduced"} and models.iloc[0] == "full"
+    summary = json.loads(json.dumps(red.to_dict()))["reduced_basis"]
+    assert summary["n_full_eigen"] == rb["n_full_eigen"] and summary["used"] is True
 
 
 def test_reduced_optimum_is_stationary_for_the_full_model(beam):
