@@ -20,9 +20,10 @@ from ..errors import (
     ParameterError,
 )
 from ..fe._model import FEModel
-from ..fe._solvers import eigsh_lowest
+from ..fe._solvers import EigenSolution, eigsh_lowest
 from ._pairing import Pairing, classify_modes, pair_modes, target_mac, target_rows
 from ._parameters import Parameter, get_path, with_values
+from ._reduced import reduced_fit
 from ._roundoff import without_roundoff
 from ._sensitivity import (
     check_difference,
@@ -65,6 +66,9 @@ class HistoryEntry:
         Model frequencies paired with the targets (Hz).
     modes : ndarray of int
         1-based model modes paired with the targets.
+    model : {"full", "reduced"}
+        ``"reduced"``: Ritz values of the reduced-basis inner loop (see ``update``'s
+        ``reduced_basis``), not eigenvalues of the full model.
     """
 
     evaluation: int
@@ -72,6 +76,7 @@ class HistoryEntry:
     cost: float
     fn_hz: np.ndarray
     modes: np.ndarray
+    model: str = "full"
 
 
 @dataclass
@@ -87,6 +92,7 @@ class _State:
     residual: np.ndarray
     jac: np.ndarray | None = None
     d_omega2: np.ndarray | None = None  # (n_targets, n_free) per physical unit
+    ritz: np.ndarray | None = None  # reduced-basis coordinates of the modes (None: full)
 
 
 class _Matched(Exception):
@@ -142,6 +148,8 @@ class _Problem:
         self._lowest: float | None = None
         self.n_rigid = 0   # rigid-body modes of the model (free-free): solved, then dropped
         self._vectors = None  # last eigenvectors: warm start of the next eigen solve
+        self.rb = None  # RitzBasis: evaluations on the reduced model while set
+        self._last_full: _State | None = None
 
     # -------------------------------------------------------------- helpers
     def to_x(self, p_free: np.ndarray) -> np.ndarray:
@@ -290,12 +298,31 @@ class _Problem:
         return classify_modes(model, vectors)
 
     # ------------------------------------------------------------- evaluate
+    def use_basis(self, basis) -> None:
+        """Evaluate on the reduced model of ``basis`` (a RitzBasis) from now on, or on the
+        full model (None)."""
+        self.rb = basis
+        self._cache = None if basis is not None else self._last_full
+
+    def _ritz(self, x: np.ndarray):
+        """Model (for DOF maps, kinds) and Ritz pairs of the reduced model at x."""
+        base, v0, _, _ = self._aff
+        dv = self.values(x)[self.free] - v0
+        n = min(self.n_modes, base.n_dof)
+        w2, Y = self.rb.eig(dv, n)
+        model = self.model_at(x) if self.need_kinds else base
+        return model, EigenSolution(w2, self.rb.V @ Y, method="ritz"), Y
+
     def state(self, x: np.ndarray) -> _State:
         x = np.asarray(x, dtype=float)
         if self._cache is not None and np.array_equal(self._cache.x, x):
             return self._cache
-        model = self.model_at(x)
-        eig = self.eigen(model)
+        ritz = None
+        if self.rb is not None:
+            model, eig, ritz = self._ritz(x)
+        else:
+            model = self.model_at(x)
+            eig = self.eigen(model)
         fn_all = np.sqrt(np.maximum(eig.omega2, 0.0)) / TWO_PI
         kinds = self.kinds_of(model, eig.vectors) if self.need_kinds else None
         has_shapes = any(t.has_shape for t in self.targets)
@@ -312,9 +339,12 @@ class _Problem:
         if self.reg > 0:
             r.append(math.sqrt(self.reg) * (x - self.x0))
         res = np.concatenate(r)
-        st = _State(x.copy(), model, eig.omega2, eig.vectors, fn_all, kinds, macm, pairing, res)
+        st = _State(x.copy(), model, eig.omega2, eig.vectors, fn_all, kinds, macm, pairing, res,
+                    ritz=ritz)
         self._record(st)
         self._cache = st
+        if ritz is None:
+            self._last_full = st
         return st
 
     def _record(self, st: _State) -> None:
@@ -334,6 +364,7 @@ class _Problem:
             cost=float(0.5 * st.residual @ st.residual),
             fn_hz=st.fn_all[st.pairing.modes].copy(),
             modes=modes,
+            model="full" if st.ritz is None else "reduced",
         ))
 
     def _mac_derivative(self, st, phi, pert, pert_eig, k, h, dmac) -> None:
@@ -400,6 +431,10 @@ class _Problem:
             if base_vals[j] + h > p.upper:
                 h = -h
             pert_eig = None
+            if st.ritz is not None:
+                # reduced model: derivative of the Ritz values (projected matrices)
+                dw2[:, k] = d_omega2(w2, st.ritz[:, modes], self.rb.dKr[k], self.rb.dMr[k])
+                continue
             if self.affine:
                 dw2[:, k] = d_omega2(w2, phi, self._aff[2][k], self._aff[3][k])
                 mats[k] = (self._aff[2][k], self._aff[3][k])
@@ -492,6 +527,12 @@ class _Problem:
             self.timing["eigen_s"] - e0
         )
         return st.jac
+
+
+def _rayleigh(model: FEModel, phi: np.ndarray) -> np.ndarray:
+    """Rayleigh quotients ``phi' K phi / phi' M phi`` of each column, (rad/s)^2."""
+    return (np.einsum("ij,ij->j", phi, model.K @ phi)
+            / np.einsum("ij,ij->j", phi, model.M @ phi))
 
 
 def _rank_report(J: np.ndarray, tol: float, names: Sequence[str]) -> dict:
@@ -730,7 +771,7 @@ class UpdateResult:
         rows = []
         labels = self._target_labels()
         for h in self.history:
-            row = {"evaluation": h.evaluation, "cost": h.cost}
+            row = {"evaluation": h.evaluation, "model": h.model, "cost": h.cost}
             row.update(h.values)
             row.update({f"{lab}_hz": f for lab, f in zip(labels, h.fn_hz)})
             row.update({f"{lab}_mode": int(m) for lab, m in zip(labels, h.modes)})
@@ -810,6 +851,13 @@ class UpdateResult:
                 return clean(v.item())
             return v
 
+        def deep(v):
+            if isinstance(v, dict):
+                return {k: deep(x) for k, x in v.items()}
+            if isinstance(v, list | tuple):
+                return [deep(x) for x in v]
+            return clean(v)
+
         def records(df):
             df = df.reset_index()
             return [{k: clean(v) for k, v in row.items()} for row in df.to_dict("records")]
@@ -834,6 +882,7 @@ class UpdateResult:
             "swaps": list(self.swaps),
             "timing": {k: clean(v) for k, v in self.timing.items()},
             "updated_values": {p.path: float(v) for p, v in zip(self.parameters, self.values)},
+            "reduced_basis": deep(self.meta.get("reduced_basis", {"used": False})),
         }
 
 
@@ -907,6 +956,7 @@ def update(
     difference: str = "central",
     freq_tol: float = 1e-7,
     affine: bool = False,
+    reduced_basis: bool | None = None,
     xtol: float = 1e-10,
     ftol: float = 1e-12,
 ) -> UpdateResult:
@@ -964,7 +1014,8 @@ def update(
         same dK/dp, dM/dp as the eigenvalue derivatives: no extra eigen solve) or
         ``"fd"`` (one extra eigen solve per parameter, mode followed by M-overlap).
     max_iter : int
-        Maximum number of residual evaluations (``max_nfev`` of least_squares).
+        Maximum number of residual evaluations (``max_nfev`` of least_squares; with
+        ``reduced_basis``: of each reduced fit, whose evaluations cost no eigen solve).
     mode_classifier : callable, optional
         ``f(model, vectors) -> labels`` used for kind checks; default
         :func:`classify_modes`.
@@ -996,6 +1047,25 @@ def update(
         assumption (``meta["affine_check_rel"]``; AccuracyWarning above 1e-6) and
         provides ``model``. A builder with a ``matrix_derivatives(path) -> (dK, dM)``
         method (:class:`mvtk.fe.AffineModel`) gives the exact derivatives instead.
+    reduced_basis : bool, optional
+        Iterate on a reduced (Rayleigh-Ritz) model instead of solving the full
+        eigenproblem at every evaluation. Applies when ``affine=True`` and there are no
+        mode-shape residuals (``mac_weight = eigvec_weight = 0``; MAC pairing is fine):
+        the basis holds the full modes at the initial values, the fit runs on the
+        projected ``V'K(p)V``, ``V'M(p)V``, then ONE full eigen solve at the reduced
+        optimum checks it and its modes join the basis; the rounds repeat until the
+        full model's own Gauss-Newton step at the last full solution is below 1e-8
+        (scaled variables; see :mod:`mvtk.updating._reduced`), so the result is a
+        stationary point of the full problem and every reported quantity
+        (frequencies, shapes, Jacobian, diagnostics) comes from the full model at the
+        final values. ``meta["reduced_basis"]`` gives the rounds, the full eigen
+        solves (``n_full_eigen``; ``timing["n_eigen"]`` counts all), the reduced-vs-full
+        frequency mismatch at the final values (``mismatch``) and that Gauss-Newton
+        step; history entries of the reduced model have ``model="reduced"``. The
+        affine check then uses Rayleigh quotients of the final modes on the real build
+        (no further eigen solve; ``meta["reduced_basis"]["affine_check"]``). None
+        (default): on whenever it applies; False: every evaluation on the full model,
+        as before; True: required (a ParameterError if it does not apply).
     xtol, ftol : float
         Stopping tolerances of least_squares.
 
@@ -1055,6 +1125,15 @@ def update(
             f"shape_derivative must be 'nelson' or 'fd', got {shape_derivative!r}")
     if eigvec_weight > 0 and not any(t.has_shape for t in tg):
         raise ParameterError("eigvec_weight > 0 needs targets with measured shapes")
+    if reduced_basis not in (None, True, False):
+        raise ParameterError(f"reduced_basis must be None, True or False, got {reduced_basis!r}")
+    rb_applies = bool(affine) and mac_weight == 0 and eigvec_weight == 0
+    if reduced_basis and not rb_applies:
+        raise ParameterError(
+            "reduced_basis=True needs affine=True and no mode-shape residuals "
+            f"(mac_weight = eigvec_weight = 0), got affine={affine!r}, "
+            f"mac_weight={mac_weight!r}, eigvec_weight={eigvec_weight!r}")
+    use_rb = rb_applies if reduced_basis is None else bool(reduced_basis)
     prob = _Problem(description, params, tg, builder, n_modes, w, float(mac_weight),
                     float(regularization), mode_classifier, rel_step, difference,
                     affine=bool(affine), eigvec_weight=float(eigvec_weight),
@@ -1077,16 +1156,22 @@ def update(
         raise ParameterError(f"freq_tol must be a number >= 0, got {freq_tol!r}")
     if mac_weight == 0 and regularization == 0 and eigvec_weight == 0:
         prob.freq_tol = float(freq_tol)
-    try:
-        sol = least_squares(
-            prob.residual, prob.x0, jac=prob.jacobian, bounds=(lb, ub), method="trf",
-            x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12,
-        )
-        x, status, message, nfev = sol.x, int(sol.status), str(sol.message), int(sol.nfev)
-    except _Matched:
-        x = prob._cache.x
-        status, nfev = 5, len(prob.history)
-        message = f"every relative frequency error is below freq_tol = {freq_tol:g}"
+    rb_meta = {"used": False}
+    if use_rb:
+        x, status, message, nfev, rb_meta = reduced_fit(
+            prob, st0, lb, ub, max_iter=max_iter, xtol=xtol, ftol=ftol, matched=_Matched,
+            freq_tol=prob.freq_tol)
+    else:
+        try:
+            sol = least_squares(
+                prob.residual, prob.x0, jac=prob.jacobian, bounds=(lb, ub), method="trf",
+                x_scale=1.0, max_nfev=max_iter, xtol=xtol, ftol=ftol, gtol=1e-12,
+            )
+            x, status, message, nfev = sol.x, int(sol.status), str(sol.message), int(sol.nfev)
+        except _Matched:
+            x = prob._cache.x
+            status, nfev = 5, len(prob.history)
+            message = f"every relative frequency error is below freq_tol = {freq_tol:g}"
     prob.freq_tol = 0.0
     st = prob.state(x)
     J = prob.jacobian(x)
@@ -1197,9 +1282,18 @@ def update(
     affine_dev = None
     if affine:
         final_model = prob.build(prob.describe(x))
-        true_eig = prob.eigen(final_model)
-        true_f = np.sqrt(np.maximum(true_eig.omega2[st.pairing.modes], 0.0)) / TWO_PI
-        affine_dev = float(np.max(np.abs(true_f / fp - 1.0)))
+        if use_rb and same_dofs(final_model, st.model):
+            # Rayleigh quotients of the final modes on the real build: the frequency
+            # change its matrices cause, exact to first order in their difference from
+            # the affine ones (to its square), without an eigen solve
+            phi = st.vectors[:, st.pairing.modes]
+            affine_dev = float(np.max(np.abs(np.sqrt(
+                _rayleigh(final_model, phi) / _rayleigh(st.model, phi)) - 1.0)))
+            rb_meta["affine_check"] = "rayleigh"
+        else:
+            true_eig = prob.eigen(final_model)
+            true_f = np.sqrt(np.maximum(true_eig.omega2[st.pairing.modes], 0.0)) / TWO_PI
+            affine_dev = float(np.max(np.abs(true_f / fp - 1.0)))
         if affine_dev > 1e-6:
             warnings.warn(
                 f"affine=True: a real build at the solution gives frequencies up to "
@@ -1243,6 +1337,7 @@ def update(
         meta={"n_modes": n_modes, "fd_eigen_parameters": sorted(prob.fd_params),
               "one_sided_parameters": sorted(prob.one_sided),
               "least_squares_status": status, "affine_check_rel": affine_dev,
+              "reduced_basis": rb_meta,
               "std_note": std_note,
               "initial_frequency_singular_values": init_f["singular_values"],
               "initial_data_singular_values": (None if init_d is None
