@@ -189,10 +189,16 @@ def _crop(x: np.ndarray, ys: list[np.ndarray], x_range):
     return x[lo:hi], [y[lo:hi] for y in ys]
 
 
+#: zlib level of the PNG encoding of :func:`figure_to_png`. Measured on the study's
+#: figures (7 x 5 to 7 x 14 in at 100 dpi): level 1 encodes in 60-70 % of the time of
+#: PIL's default 6 for files 4-7 % larger (9 is 3x slower for 3 % smaller).
+PNG_COMPRESS_LEVEL = 1
+
+
 def figure_to_png(fig: Any, dpi: int = 100) -> bytes:
-    """PNG bytes of a matplotlib figure."""
+    """PNG bytes of a matplotlib figure (fast zlib level, :data:`PNG_COMPRESS_LEVEL`)."""
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
+    fig.savefig(buf, format="png", dpi=dpi, pil_kwargs={"compress_level": PNG_COMPRESS_LEVEL})
     return buf.getvalue()
 
 
