@@ -116,9 +116,9 @@ def _node_values(geometry, shape) -> np.ndarray:
 
 
 #: Fixed layout of :func:`plot_paired_shapes` in inches: left margin (tick labels and
-#: y label), gap between the two columns (inner tick labels hidden), colorbar strip right
-#: of the panels (gap, bar, tick labels and label), bottom margin (tick labels and x
-#: label), top margin, title band above each panel, largest panel width and height.
+#: y label), gap between the two columns, colorbar strip right of the panels (gap, bar,
+#: tick labels and label), bottom margin (tick labels and x label), top margin, title
+#: band above each panel, largest panel width and height.
 PAIRED = {"left": 0.5, "wgap": 0.25, "cbar": (0.25, 0.18, 0.75), "bottom": 0.45,
           "top": 0.05, "title": 0.3, "max_panel_w": 2.6, "max_panel_h": 2.0}
 
@@ -128,8 +128,11 @@ def plot_paired_shapes(geometry: Any, test: Any, fe: Any, pairing: Any, *, max_p
 
     One row per accepted pair (test left, FE right, the FE shape's sign matched to the
     test), each shape scaled to a largest absolute value of 1 and coloured by it on
-    the same colour scale. All panels show the same x-y extent at equal scales; tick
-    labels are written on the outer panels only.
+    the same colour scale. All panels show the same x-y extent at equal scales.
+
+    The panels are drawn as a grid of framed regions of one axes (the tick labels in
+    mm on the left column and the bottom row): a figure of a dozen small matplotlib
+    axes spends most of its time creating and laying out their ticks.
 
     Parameters
     ----------
@@ -144,8 +147,11 @@ def plot_paired_shapes(geometry: Any, test: Any, fe: Any, pairing: Any, *, max_p
     Returns
     -------
     matplotlib.figure.Figure
-        ``2 n_pairs`` panels (x, y in mm) and a colorbar (z, normalised).
+        Two axes: the grid of ``2 n_pairs`` panels (one scatter of all panels' nodes,
+        values in row order test, FE; panel titles as annotations) and the colorbar.
     """
+    from matplotlib.collections import LineCollection
+
     pairs = pairing.pairs[:max_pairs]
     if not pairs:
         raise ParameterError("no accepted pairs to draw")
@@ -163,46 +169,60 @@ def plot_paired_shapes(geometry: Any, test: Any, fe: Any, pairing: Any, *, max_p
     fig = figure(width, height)
     # the panels and the colorbar centred across the figure width
     left = (width - (g["left"] + 2 * pw + g["wgap"] + gap + bar + label)) / 2 + g["left"]
-    # about one tick per 0.3 in, as matplotlib's automatic locator would place them
-    xt = nice_ticks(x0, x1, max(3, int(pw / 0.3)))
-    yt = nice_ticks(y0, y1, max(3, int(ph / 0.3)))
-    xl, yl = [f"{t:g}" for t in xt], [f"{t:g}" for t in yt]
-    sc = None
+    grid_w, grid_h = 2 * pw + g["wgap"], n * ph + (n - 1) * g["title"]
+    ax = axes_at(fig, left, g["bottom"], grid_w, grid_h)
+    # data units of the grid: mm of the panels, the gaps converted at the same scale
+    dx, dy = x1 - x0, y1 - y0
+    mm_per_in = dx / pw
+    step_x, step_y = dx + g["wgap"] * mm_per_in, dy + g["title"] * mm_per_in
+    ax.set_xlim(0.0, 2 * dx + g["wgap"] * mm_per_in)
+    ax.set_ylim(0.0, n * dy + (n - 1) * g["title"] * mm_per_in)
+    ax.set_frame_on(False)
+    origins = [(c * step_x - x0, (n - 1 - r) * step_y - y0) for r in range(n) for c in (0, 1)]
+    pts, vals, titles = [], [], []
     for r, (tm, fm) in enumerate(pairs):
         vt = _node_values(geometry, test.sel(mode=tm))
         vf = _node_values(geometry, fe.sel(mode=fm))
         s = 1.0 if np.nansum(vt * vf) >= 0 else -1.0
         row = tab.loc[tm]
-        bottom = g["bottom"] + (n - 1 - r) * (ph + g["title"])
         for c, (v, name, m) in enumerate(((vt, "test", tm), (s * vf, "FE", fm))):
-            ax = axes_at(fig, left + c * (pw + g["wgap"]), bottom, pw, ph)
+            ox, oy = origins[2 * r + c]
             peak = np.nanmax(np.abs(v)) if np.any(np.isfinite(v)) else 1.0
-            sc = _wire(ax, geometry, v / (peak or 1.0))
-            ax.set_xlim(x0, x1)
-            ax.set_ylim(y0, y1)
-            ax.set_aspect("equal")
-            # ticks on the outer panels only (same scales everywhere): a tick costs a
-            # few artists per panel, most of the time of a figure of small panels
-            outer_x, outer_y = r == n - 1, c == 0
-            ax.set_xticks(xt if outer_x else [], xl if outer_x else [], fontsize=6)
-            ax.set_yticks(yt if outer_y else [], yl if outer_y else [], fontsize=6)
-            if outer_x:
-                ax.set_xlabel("x [mm]", fontsize=7)
-            if outer_y:
-                ax.set_ylabel("y [mm]", fontsize=7)
+            pts.append(xy + (ox, oy))
+            vals.append(v / (peak or 1.0))
             f = row["fn_test_hz"] if c == 0 else row["fn_fe_hz"]
             extra = f", MAC {row['mac']:.2f}" if c == 1 else ""
-            ax.set_title(f"{name} mode {m}: {f:.1f} Hz{extra}", fontsize=8, y=1.0)
-    if sc is not None:
-        area = height - g["bottom"] - g["top"] - g["title"]
-        ch = min(0.6 * area, 6.0)
-        cax = axes_at(fig, left + 2 * pw + g["wgap"] + gap, g["bottom"] + (area - ch) / 2,
-                      bar, ch)
-        fig.colorbar(sc, cax=cax)
-        cax.set_yticks(np.linspace(-1.0, 1.0, 9),
-                       [f"{t:.2f}".replace("-", "\u2212") for t in np.linspace(-1, 1, 9)])
-        cax.tick_params(labelsize=7)
-        cax.set_ylabel("z (normalised)", fontsize=8)
+            titles.append((ox + (x0 + x1) / 2, oy + y1, f"{name} mode {m}: {f:.1f} Hz{extra}"))
+    frame = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+    boxes = [np.r_[frame + o, frame[:1] + o] for o in origins]
+    ax.add_collection(LineCollection(boxes, colors="k", linewidths=0.8, clip_on=False),
+                      autolim=False)
+    edges = geometry.edges()
+    if len(edges):
+        ax.add_collection(LineCollection([seg + o for o in origins for seg in xy[edges]],
+                                         colors="k", linewidths=1.0), autolim=False)
+    p = np.concatenate(pts)
+    sc = ax.scatter(p[:, 0], p[:, 1], c=np.concatenate(vals), cmap="coolwarm", vmin=-1,
+                    vmax=1, s=40, edgecolors="k", linewidths=0.5, zorder=3)
+    for tx, ty, text in titles:
+        ax.annotate(text, (tx, ty), xytext=(0, 3), textcoords="offset points", ha="center",
+                    va="bottom", fontsize=8)
+    # tick labels in mm on the left column and the bottom row, about one per 0.3 in
+    xt = nice_ticks(x0, x1, max(3, int(pw / 0.3)))
+    yt = nice_ticks(y0, y1, max(3, int(ph / 0.3)))
+    ax.set_xticks(np.r_[xt - x0, xt - x0 + step_x], [f"{t:g}" for t in xt] * 2, fontsize=6)
+    ax.set_yticks(np.concatenate([yt - y0 + k * step_y for k in range(n)]),
+                  [f"{t:g}" for t in yt] * n, fontsize=6)
+    ax.set_xlabel("x [mm]", fontsize=7)
+    ax.set_ylabel("y [mm]", fontsize=7)
+    area = height - g["bottom"] - g["top"] - g["title"]
+    ch = min(0.6 * area, 6.0)
+    cax = axes_at(fig, left + grid_w + gap, g["bottom"] + (area - ch) / 2, bar, ch)
+    fig.colorbar(sc, cax=cax)
+    cax.set_yticks(np.linspace(-1.0, 1.0, 5),
+                   [f"{t:.1f}".replace("-", "\u2212") for t in np.linspace(-1, 1, 5)])
+    cax.tick_params(labelsize=7)
+    cax.set_ylabel("z (normalised)", fontsize=8)
     return fig
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ._figures import FIG_WIDTH, _plain_log_axis, minmax_decimate
+from ._figures import FIG_WIDTH, _plain_log_axis, _sparse_log_minor, minmax_decimate
 from ._figures import _constrained_figure as _figure
 from ._layout import axes_at, figure
 
@@ -46,13 +46,21 @@ def plot_stabilisation(diagram, modes=None, *, title: str = ""):
             fd, cd = minmax_decimate(f_ind, 20 * np.log10(np.abs(curve)))
             ax2.plot(fd, cd, lw=0.8, color="0.35" if k == 0 else "0.7", zorder=0)
     ax2.set_ylabel("CMIF [dB]" if diagram.method == "pLSCF" else "PSD singular values [dB]")
+    from matplotlib.lines import Line2D
+
     fn = diagram.fn_hz
+    handles = []
     for st in ("o", "f", "d", "v", "s"):
         sel = diagram.status == st
         if sel.any():
             c, m, lab = _STYLE[st]
-            ax.scatter(fn[sel], diagram.order[sel], s=12 if st == "s" else 8, c=c, marker=m,
-                       label=lab, zorder=3)
+            size = 12 if st == "s" else 8
+            ax.scatter(fn[sel], diagram.order[sel], s=size, c=c, marker=m, label=lab,
+                       zorder=3)
+            # a marker-only line as the legend entry: the same symbol, and cheaper to
+            # draw than the legend's copy of a scatter collection
+            handles.append(Line2D([], [], ls="", marker=m, ms=np.sqrt(size), color=c,
+                                  label=lab))
     if modes is not None:
         for f in modes.fn_hz:
             ax.axvline(f, color="k", lw=0.7, ls="--", zorder=2)
@@ -62,7 +70,7 @@ def plot_stabilisation(diagram, modes=None, *, title: str = ""):
     ax.yaxis.get_major_locator().set_params(integer=True)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("model order")
-    ax.legend(loc="upper left", fontsize=7, ncol=3)
+    ax.legend(handles=handles, loc="upper left", fontsize=7, ncol=3)
     ax.set_title(title or f"{diagram.method} stabilisation diagram", y=1.0)
     return fig
 
@@ -130,6 +138,7 @@ def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 
     handles += [Line2D([], [], color="k", lw=1.0, label="measured"),
                 Line2D([], [], color="k", lw=1.0, ls="--", label="synthesised")]
     _plain_log_axis(a1.yaxis)
+    _sparse_log_minor(a1)
     for fn in modes.fn_hz:
         a1.axvline(fn, color="0.6", lw=0.5)
     a1.tick_params(labelbottom=False)

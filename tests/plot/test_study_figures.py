@@ -69,50 +69,76 @@ def _titles(fig):
     return [ax.get_title() for ax in fig.axes]
 
 
+def _panels(fig, n_panels, n_nodes):
+    """Per panel of a paired-shapes figure: its node positions (relative to the panel
+    frame's lower-left corner, mm), its values and its frame (x0, y0, x1, y1)."""
+    ax = fig.axes[0]
+    sc = ax.collections[-1]
+    pts, vals = sc.get_offsets(), np.asarray(sc.get_array())
+    assert len(pts) == n_panels * n_nodes
+    frames = [seg for seg in ax.collections[0].get_segments()]
+    assert len(frames) == n_panels
+    out = []
+    for k, fr in enumerate(frames):
+        lo, hi = fr.min(axis=0), fr.max(axis=0)
+        p = pts[k * n_nodes:(k + 1) * n_nodes]
+        assert np.all(p >= lo) and np.all(p <= hi)   # every node inside its frame
+        out.append((p - lo, vals[k * n_nodes:(k + 1) * n_nodes], (*lo, *hi)))
+    return out
+
+
 def test_paired_shapes_show_each_pair_normalised_with_matched_sign(plate):
     _, geo, test, fe, pairing, _ = plate
     pairs = pairing.pairs[:6]
     assert len(pairs) == 6
     fig = plot_paired_shapes(geo, test, fe, pairing)
     assert fig.get_layout_engine() is None
-    panels, cbar = fig.axes[:-1], fig.axes[-1]
-    assert len(panels) == 2 * len(pairs)
+    ax, cbar = fig.axes
     assert cbar.get_ylabel() == "z (normalised)"
+    panels = _panels(fig, 2 * len(pairs), geo.n_nodes)
     tab = pairing.table.set_index("test_mode")
+    titles = [t.get_text() for t in ax.texts]
+    xy = geo.xyz[:, :2] * 1e3
     for r, (tm, fm) in enumerate(pairs):
-        at, af = panels[2 * r], panels[2 * r + 1]
-        assert at.get_title() == f"test mode {tm}: {tab.loc[tm, 'fn_test_hz']:.1f} Hz"
-        assert af.get_title() == (f"FE mode {fm}: {tab.loc[tm, 'fn_fe_hz']:.1f} Hz, "
-                                  f"MAC {tab.loc[tm, 'mac']:.2f}")
-        vt = at.collections[0].get_array()
-        vf = af.collections[0].get_array()
-        assert vt.size == vf.size == geo.n_nodes
+        assert titles[2 * r] == f"test mode {tm}: {tab.loc[tm, 'fn_test_hz']:.1f} Hz"
+        assert titles[2 * r + 1] == (f"FE mode {fm}: {tab.loc[tm, 'fn_fe_hz']:.1f} Hz, "
+                                     f"MAC {tab.loc[tm, 'mac']:.2f}")
+        (pt, vt, _), (pf, vf, _) = panels[2 * r], panels[2 * r + 1]
         # each shape scaled to a largest |z| of 1; the FE sign follows the test
         assert np.nanmax(np.abs(vt)) == pytest.approx(1.0)
         assert np.nanmax(np.abs(vf)) == pytest.approx(1.0)
         assert np.nansum(vt * vf) > 0
-        # the values are the sensor readings in node order (sign of +z kept)
+        # the values are the sensor readings in node order (sign of +z kept) ...
         want = test.sel(mode=tm).values
         np.testing.assert_allclose(vt, want / np.abs(want).max())
-    # the same extent and equal scales in every panel; tick labels on the outer ones
-    lims = {(ax.get_xlim(), ax.get_ylim()) for ax in panels}
-    assert len(lims) == 1
+        # ... at the nodes' positions, the same in every panel
+        np.testing.assert_allclose(pt - pt[0], xy - xy[0], atol=1e-9)
+        np.testing.assert_allclose(pf, pt, atol=1e-9)
+    # panels of one size in a 6 x 2 grid, apart, the title above each one
+    frames = np.array([f for *_, f in panels])
+    sizes = frames[:, 2:] - frames[:, :2]
+    np.testing.assert_allclose(sizes, np.broadcast_to(sizes[0], sizes.shape))
+    assert len(set(np.round(frames[:, 0], 9))) == 2 and len(set(np.round(frames[:, 1], 9))) == 6
     fig.canvas.draw()
-    for ax in panels:
-        sx, sy = np.abs(np.diag(ax.transData.get_matrix())[:2])
-        assert sx == pytest.approx(sy, rel=2e-3)
-    xy = geo.xyz[:, :2] * 1e3
-    x0, x1 = panels[0].get_xlim()
-    y0, y1 = panels[0].get_ylim()
-    assert x0 < xy[:, 0].min() and x1 > xy[:, 0].max()
-    assert y0 < xy[:, 1].min() and y1 > xy[:, 1].max()
-    bottom, left = panels[-2:], panels[::2]
-    for ax in panels:
-        labelled_x = [t.get_text() for t in ax.get_xticklabels() if t.get_text()]
-        labelled_y = [t.get_text() for t in ax.get_yticklabels() if t.get_text()]
-        assert bool(labelled_x) == (ax in bottom) and bool(labelled_y) == (ax in left)
-        assert (ax.get_xlabel() == "x [mm]") == (ax in bottom)
-        assert (ax.get_ylabel() == "y [mm]") == (ax in left)
+    r = fig.canvas.get_renderer()
+    for t, f in zip(ax.texts, frames):
+        e = t.get_window_extent(r)
+        top = ax.transData.transform([(f[0] + f[2]) / 2, f[3]])
+        assert e.y0 >= top[1] and abs((e.x0 + e.x1) / 2 - top[0]) < 1.0
+    # equal scales; tick labels in mm on the left column and the bottom row
+    sx, sy = np.abs(np.diag(ax.transData.get_matrix())[:2])
+    assert sx == pytest.approx(sy, rel=2e-3)
+    # a label reads the mm of the x (y) coordinate under it in its column (row)
+    for which, col in (("x", 0), ("y", 1)):
+        ticks = ax.get_xticks() if which == "x" else ax.get_yticks()
+        labels = ax.get_xticklabels() if which == "x" else ax.get_yticklabels()
+        mm = np.array([float(t.get_text()) for t in labels])
+        # panel of the bottom-left: data = frame corner + (mm - lower limit)
+        frame = frames[-2]
+        lower = xy[0, col] - panels[-2][0][0, col]
+        first = ticks < frame[2 + col]
+        np.testing.assert_allclose(ticks[first] - frame[col], mm[first] - lower, atol=1e-9)
+    assert ax.get_xlabel() == "x [mm]" and ax.get_ylabel() == "y [mm]"
     assert_readable(fig)
 
 
@@ -123,13 +149,14 @@ def test_paired_shapes_of_a_long_beam_keep_equal_scales(plate):
                     for y in np.linspace(0.0, 0.06, 4)])
     geo = co.TestGeometry(np.arange(1, 21), pts)
     fig = plot_paired_shapes(geo, test, fe, pairing, max_pairs=2)
-    assert len(fig.axes) == 5
+    assert len(fig.axes) == 2
     fig.canvas.draw()
     ax = fig.axes[0]
     sx, sy = np.abs(np.diag(ax.transData.get_matrix())[:2])
     assert sx == pytest.approx(sy, rel=2e-3)
-    assert ax.get_position().height * fig.get_figheight() > 0.3 * (
-        ax.get_position().width * fig.get_figwidth())
+    (*_, f), = _panels(fig, 4, 20)[:1]
+    w, h = f[2] - f[0], f[3] - f[1]
+    assert 0.3 * w < h < w
     assert_readable(fig)
 
 
