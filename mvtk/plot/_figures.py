@@ -320,18 +320,22 @@ def plot_decay(
     fig = _figure(FIG_WIDTH, 6.0 if log_panel else 4.0, n_rows=2 if log_panel else 1,
                   title=bool(title))
     ax = fig.add_subplot(2 if log_panel else 1, 1, 1)
-    long_record = tt.size > MAX_POINTS
+    # one bin per pixel column of the panel at 100 dpi (the report's PNG resolution;
+    # an SVG is shown at about that width): the band, the fit and the log panel hold
+    # what can be drawn and no more (the SVG of a 6400-sample decay 114 -> ~70 kB)
+    n_bins = max(1, int(round(ax.get_position().width * FIG_WIDTH * 100)))
+    long_record = tt.size > 2 * n_bins
     if long_record:
         # min/max per pixel column as a filled band bounded by the signal's peaks
-        mid, lo, hi = _bin_extrema(tt, xx, MAX_POINTS // 2)
+        mid, lo, hi = _bin_extrema(tt, xx, n_bins)
         ax.fill_between(mid, lo, hi, color="0.6", lw=0, label="signal (min/max per pixel)")
     else:
         ax.plot(tt, xx, lw=0.6, color="0.45", label="signal")
     if envelope is not None:
-        te, ee = minmax_decimate(tt, np.asarray(envelope, dtype=float))
+        te, ee = minmax_decimate(tt, np.asarray(envelope, dtype=float), n_bins)
         ax.plot(te, ee, lw=1.0, color="C0", label="envelope")
     if fit is not None:
-        tf, ff = minmax_decimate(tt, np.asarray(fit, dtype=float))
+        tf, ff = minmax_decimate(tt, np.asarray(fit, dtype=float), n_bins)
         ax.plot(tf, ff, lw=1.5, color="C3", ls="--", label=label_fit)
         ax.plot(tf, -ff, lw=1.5, color="C3", ls="--")
     ax.set_xlabel("time [s]")
@@ -343,7 +347,7 @@ def plot_decay(
     if log_panel:
         ax2 = fig.add_subplot(2, 1, 2, sharex=ax)
         if long_record:
-            mid, _, peak = _bin_extrema(tt, np.abs(xx), MAX_POINTS // 2)
+            mid, _, peak = _bin_extrema(tt, np.abs(xx), n_bins)
         else:
             mid, peak = tt, np.abs(xx)
         good = np.isfinite(peak) & (peak > 0)
@@ -352,7 +356,8 @@ def plot_decay(
         if fit is not None:
             ff = np.asarray(fit, dtype=float)
             pos = ff > 0
-            tf, ffd = minmax_decimate(tt[pos], ff[pos]) if pos.sum() >= 2 else (tt[:0], ff[:0])
+            tf, ffd = (minmax_decimate(tt[pos], ff[pos], n_bins) if pos.sum() >= 2
+                       else (tt[:0], ff[:0]))
             ax2.semilogy(tf, ffd, lw=1.5, color="C3", ls="--", label=label_fit)
         ax2.set_xlabel("time [s]")
         ax2.set_ylabel(f"|{ylabel}| (log)" if len(ylabel) < 30 else "amplitude (log)")
@@ -409,7 +414,13 @@ def plot_mode_shapes(
     ax_h = (height - bottom - top - hgap * (n_rows - 1)) / n_rows
     fig.subplots_adjust(left=left / width, right=1 - right / width, bottom=bottom / height,
                         top=1 - top / height, wspace=wgap / ax_w, hspace=hgap / ax_h)
+    from ._layout import nice_ticks
+
     tri = Triangulation(xyz[:, 0] * 1e3, xyz[:, 1] * 1e3)
+    # the same ticks in every panel, given (about one per 0.5 in): the automatic
+    # locator's ticks of every panel are most of this figure's render time
+    xt = nice_ticks(*(tri.x.min(), tri.x.max()), max(2, int(ax_w / 0.5)))
+    yt = nice_ticks(*(tri.y.min(), tri.y.max()), max(2, int(ax_h / 0.4)))
     for k in range(n_modes):
         ax = fig.add_subplot(n_rows, n_cols, k + 1)
         shape = u[:, k]
@@ -421,10 +432,13 @@ def plot_mode_shapes(
         ax.set_title(f"mode {k + 1}: {fn[k]:.2f} Hz", fontsize=9, y=1.0)
         ax.set_xlabel("x [mm]", fontsize=8)
         ax.set_ylabel("y [mm]", fontsize=8)
-        ax.tick_params(labelsize=7)
+        ax.set_xticks(xt, [f"{t:g}" for t in xt], fontsize=7)
+        ax.set_yticks(yt, [f"{t:g}" for t in yt], fontsize=7)
     cax = fig.add_axes(((width - 0.95) / width, 0.1 + 0.8 * bottom / height, 0.2 / width,
                         0.8 * (1 - (top + bottom) / height)))
     fig.colorbar(cs, cax=cax, label="uz (normalised)")
+    cax.set_yticks(np.linspace(-1.0, 1.0, 5),
+                   [f"{t:.1f}".replace("-", "\u2212") for t in np.linspace(-1, 1, 5)])
     return fig
 
 

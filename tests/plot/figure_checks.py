@@ -35,10 +35,14 @@ def assert_readable(fig, *, overlap_px: float = 1.0):
 
     Parameters
     ----------
-    fig : matplotlib Figure (Agg canvas)
+    fig : matplotlib Figure (given an Agg canvas if it has none)
     overlap_px : float
         Overlap tolerated between two text boxes in pixels (antialiasing).
     """
+    if not hasattr(fig.canvas, "get_renderer"):
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+        FigureCanvasAgg(fig)
     fig.canvas.draw()
     r = fig.canvas.get_renderer()
     box = fig.bbox

@@ -289,3 +289,42 @@ def test_readability_check_catches_overlapping_texts():
     with pytest.raises(AssertionError, match="texts overlap"):
         assert_readable(fig)
     assert len(drawn_texts(fig)) >= 2
+
+
+def test_decay_is_drawn_per_pixel_column_with_its_peaks():
+    from mvtk.plot import plot_decay
+
+    t = np.arange(6400) * (150.0 / 6400)
+    env = 2e-3 * np.exp(-0.05 * t)
+    x = env * np.cos(2 * np.pi * 13.26 * t)
+    fig = plot_decay(t, x, fit=env, ylabel="tip displacement [m]", title="Free decay")
+    ax, ax2 = fig.axes
+    columns = round(ax.get_position().width * fig.get_figwidth() * 100)
+    band = ax.collections[0].get_paths()[0].vertices
+    assert len(band) <= 2 * columns + 5
+    # the band reaches the signal's extremes; the fit and the log panel one point pair
+    # (min, max) per pixel column at most
+    assert band[:, 1].max() == x.max() and band[:, 1].min() == x.min()
+    assert all(len(ln.get_xdata()) <= 2 * columns for ln in ax.lines + ax2.lines)
+    peak = ax2.lines[0].get_ydata()
+    assert peak.max() == np.abs(x).max()
+    assert_readable(fig)
+
+
+def test_mode_shape_panels_share_their_given_ticks():
+    from mvtk.plot import plot_mode_shapes
+
+    xs, ys = np.meshgrid(np.linspace(0, 0.18, 13), np.linspace(0, 0.135, 10))
+    nodes = np.c_[xs.ravel(), ys.ravel(), 0 * xs.ravel()]
+    uz = np.c_[xs.ravel() ** 2, xs.ravel() * (ys.ravel() - 0.0675)]
+    fig = plot_mode_shapes(nodes, uz, [14.25, 42.18])
+    panels, cbar = fig.axes[:-1], fig.axes[-1]
+    assert [ax.get_title() for ax in panels] == ["mode 1: 14.25 Hz", "mode 2: 42.18 Hz"]
+    ticks = {(tuple(ax.get_xticks()), tuple(ax.get_yticks())) for ax in panels}
+    assert len(ticks) == 1
+    (xt, yt), = ticks
+    assert 3 <= len(xt) <= 8 and 2 <= len(yt) <= 8
+    assert min(xt) >= 0 and max(xt) <= 180 and min(yt) >= 0 and max(yt) <= 135
+    assert [t.get_text() for t in cbar.get_yticklabels()] == ["\u22121.0", "\u22120.5", "0.0",
+                                                              "0.5", "1.0"]
+    assert_readable(fig)
