@@ -204,8 +204,8 @@ def _crop(x: np.ndarray, ys: list[np.ndarray], x_range):
 
 
 #: zlib level of the PNG encoding of :func:`figure_to_png`. Measured on the study's
-#: figures (7 x 5 to 7 x 14 in at 100 dpi): level 1 encodes in 60-70 % of the time of
-#: PIL's default 6 for files 4-7 % larger (9 is 3x slower for 3 % smaller).
+#: figures (7 x 5 and 7 x 14 in at 100 dpi): level 1 encodes in about 70 % of the time
+#: of PIL's default 6 for files 5-8 % larger (9 is 2-3x slower for 3-4 % smaller).
 PNG_COMPRESS_LEVEL = 1
 
 
