@@ -5,13 +5,20 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
+from ._figures import FIG_WIDTH, _plain_log_axis, _sparse_log_minor, minmax_decimate
 from ._figures import _constrained_figure as _figure
+from ._layout import axes_at, figure
 
 __all__ = ["plot_stabilisation", "plot_frf_synthesis", "plot_automac"]
 
 _STYLE = {"s": ("C3", "o", "stable f, zeta, vector"), "v": ("C2", "^", "stable f, vector"),
           "d": ("C1", "s", "stable f, zeta"), "f": ("C0", "x", "stable f"),
           "o": ("0.6", ".", "new / unstable")}
+
+
+#: Fixed layout of the stabilisation diagram in inches: left (tick labels and y label),
+#: right (the indicator axis' tick labels and label), bottom, top (title).
+STAB_LAYOUT = {"left": 0.7, "right": 0.75, "bottom": 0.55, "top": 0.4, "height": 4.5}
 
 
 def plot_stabilisation(diagram, modes=None, *, title: str = ""):
@@ -26,38 +33,65 @@ def plot_stabilisation(diagram, modes=None, *, title: str = ""):
     The indicator (CMIF singular values for pLSCF, singular values of the output PSD
     matrix for SSI-cov, in dB) is drawn on a second axis behind the poles.
     """
-    fig = _figure(8.0, 4.5)
-    ax = fig.add_subplot()
+    g = STAB_LAYOUT
+    width, height = FIG_WIDTH, g["height"]
+    fig = figure(width, height)
+    ax = axes_at(fig, g["left"], g["bottom"], width - g["left"] - g["right"],
+                 height - g["bottom"] - g["top"])
     ax2 = ax.twinx()
     ind = np.asarray(diagram.indicator)
+    f_ind = np.asarray(diagram.indicator_f_hz, dtype=float)
     with np.errstate(divide="ignore"):
         for k, curve in enumerate(ind[:3]):
-            ax2.plot(diagram.indicator_f_hz, 20 * np.log10(np.abs(curve)), lw=0.8,
-                     color="0.35" if k == 0 else "0.7", zorder=0)
+            fd, cd = minmax_decimate(f_ind, 20 * np.log10(np.abs(curve)))
+            ax2.plot(fd, cd, lw=0.8, color="0.35" if k == 0 else "0.7", zorder=0)
     ax2.set_ylabel("CMIF [dB]" if diagram.method == "pLSCF" else "PSD singular values [dB]")
+    from matplotlib.lines import Line2D
+
     fn = diagram.fn_hz
+    handles = []
     for st in ("o", "f", "d", "v", "s"):
         sel = diagram.status == st
         if sel.any():
             c, m, lab = _STYLE[st]
-            ax.scatter(fn[sel], diagram.order[sel], s=12 if st == "s" else 8, c=c, marker=m,
-                       label=lab, zorder=3)
+            size = 12 if st == "s" else 8
+            ax.scatter(fn[sel], diagram.order[sel], s=size, c=c, marker=m, label=lab,
+                       zorder=3)
+            # a marker-only line as the legend entry: the same symbol, and cheaper to
+            # draw than the legend's copy of a scatter collection
+            handles.append(Line2D([], [], ls="", marker=m, ms=np.sqrt(size), color=c,
+                                  label=lab))
     if modes is not None:
         for f in modes.fn_hz:
             ax.axvline(f, color="k", lw=0.7, ls="--", zorder=2)
     ax.set_zorder(ax2.get_zorder() + 1)
     ax.patch.set_visible(False)
     ax.set_xlim(*diagram.band_hz)
+    ax.yaxis.get_major_locator().set_params(integer=True)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("model order")
-    ax.legend(loc="upper left", fontsize=7, ncol=3)
-    ax.set_title(title or f"{diagram.method} stabilisation diagram")
+    ax.legend(handles=handles, loc="upper left", fontsize=7, ncol=3)
+    ax.set_title(title or f"{diagram.method} stabilisation diagram", y=1.0)
     return fig
+
+
+#: Fixed layout of the FRF synthesis figure in inches: left (log tick labels and y
+#: label), right, bottom, the gap between the two panels (the upper panel's x tick
+#: labels are hidden: the panels share the frequency axis), the title above and the
+#: legend rows between the title and the upper panel.
+SYNTH_LAYOUT = {"left": 0.85, "right": 0.2, "bottom": 0.55, "gap": 0.15, "title": 0.35,
+                "legend_row": 0.17, "height": 5.0}
 
 
 def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 4,
                        title: str = ""):
     """Measured vs synthesised FRF magnitude and phase for some responses.
+
+    Solid lines are measured, dashed synthesised, one colour per response (legend above
+    the plot, with each response's correlation); grey vertical lines mark the
+    identified natural frequencies. Lines longer than two points per pixel column are
+    drawn as their minimum and maximum per column (:func:`minmax_decimate`), which
+    keeps every peak and phase jump.
 
     Parameters
     ----------
@@ -68,6 +102,8 @@ def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 
     reference : str or int
         Reference label or position.
     """
+    from matplotlib.lines import Line2D
+
     if modes.frf is None or modes.synthesised is None:
         raise ParameterError("plot_frf_synthesis: these modes have no FRFs (output-only)")
     h, s = modes.frf, modes.synthesised
@@ -78,26 +114,45 @@ def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 
         idx = list(range(min(max_curves, len(names))))
     else:
         idx = [r if isinstance(r, int) else names.index(str(r)) for r in responses]
-    f = h["frequency"].values
-    fig = _figure(8.0, 5.0)
-    a1 = fig.add_subplot(2, 1, 1)
-    a2 = fig.add_subplot(2, 1, 2, sharex=a1)
+    f = np.asarray(h["frequency"].values, dtype=float)
+    g = SYNTH_LAYOUT
+    width, height = FIG_WIDTH, g["height"]
+    n_entries = len(idx) + 2
+    n_cols = 3
+    top = g["title"] + g["legend_row"] * -(-n_entries // n_cols) + 0.05
+    pw = width - g["left"] - g["right"]
+    ph = (height - top - g["bottom"] - g["gap"]) / 2
+    fig = figure(width, height)
+    a2 = axes_at(fig, g["left"], g["bottom"], pw, ph)
+    a1 = axes_at(fig, g["left"], g["bottom"] + ph + g["gap"], pw, ph, sharex=a2)
+    n_bins = int(pw * fig.dpi)  # one bin per pixel column at the figure's dpi
+    handles = []
     for k, i in enumerate(idx):
         c = f"C{k % 10}"
         corr = float(modes.correlation.values[i])
-        a1.semilogy(f, np.abs(h.values[i, j]), color=c, lw=1.0,
-                    label=f"{names[i]} (corr {corr:.3f})")
-        a1.semilogy(f, np.abs(s.values[i, j]), color=c, lw=1.0, ls="--")
-        a2.plot(f, np.degrees(np.angle(h.values[i, j])), color=c, lw=0.8)
-        a2.plot(f, np.degrees(np.angle(s.values[i, j])), color=c, lw=0.8, ls="--")
+        handles.append(Line2D([], [], color=c, lw=1.0, label=f"{names[i]} (corr {corr:.3f})"))
+        for data, ls in ((h.values[i, j], "-"), (s.values[i, j], "--")):
+            a1.semilogy(*minmax_decimate(f, np.abs(data), n_bins), color=c, lw=1.0, ls=ls)
+            a2.plot(*minmax_decimate(f, np.degrees(np.angle(data)), n_bins), color=c, lw=0.8,
+                    ls=ls)
+    handles += [Line2D([], [], color="k", lw=1.0, label="measured"),
+                Line2D([], [], color="k", lw=1.0, ls="--", label="synthesised")]
+    _plain_log_axis(a1.yaxis)
+    _sparse_log_minor(a1)
     for fn in modes.fn_hz:
         a1.axvline(fn, color="0.6", lw=0.5)
-    a1.set_ylabel("|H|  (solid measured, dashed synthesised)")
+    a1.tick_params(labelbottom=False)
+    a1.set_xlim(f[0], f[-1])
+    a1.set_ylabel("|H|")
     a2.set_ylabel("phase [deg]")
+    a2.set_ylim(-200.0, 200.0)
+    a2.set_yticks([-180, -90, 0, 90, 180])
     a2.set_xlabel("frequency [Hz]")
-    a1.legend(fontsize=7)
+    a1.legend(handles=handles, fontsize=7, ncol=n_cols, loc="lower center",
+              bbox_to_anchor=(0.5, 1.0), frameon=False)
     a1.set_title(title or f"measured vs synthesised FRFs, reference {refs[j]} (overall "
-                 f"correlation {modes.correlation.attrs['overall']:.3f})")
+                 f"correlation {modes.correlation.attrs['overall']:.3f})", fontsize=10,
+                 y=1.0 + (top - g["title"]) / ph)
     return fig
 
 
