@@ -219,6 +219,10 @@ class Decomposition:
         base_K, base_M = _on_pattern(K0, pattern_K), _on_pattern(M0, pattern_M)
         data_K = np.vstack([base_K] + [_on_pattern(K, pattern_K) - base_K for K, _ in mats])
         data_M = np.vstack([base_M] + [_on_pattern(M, pattern_M) - base_M for _, M in mats])
+        # the entries of K that are round-off in every build (couplings that cancel,
+        # see mvtk.updating._roundoff) are dropped, as the full solve drops them
+        data_K[:, _roundoff_entries(pattern_K, np.vstack([_on_pattern(K, pattern_K)
+                                                          for K, _ in mats]))] = 0.0
         dec = cls(p0, w, colors, degrees, depends, pattern_K, pattern_M, data_K, data_M,
                   0, 0.0, (m0.dof_node, m0.dof_component))
         # check off the grid (inside the box) against a real build
@@ -251,6 +255,22 @@ def _union(mats) -> sp.csr_matrix:
     U = _canonical(U)
     U.data[:] = 0.0
     return U
+
+
+def _roundoff_entries(P: sp.csr_matrix, data: np.ndarray) -> np.ndarray:
+    """Mask of the entries of pattern ``P`` below ROUNDOFF_REL sqrt(|K_ii K_jj|) in every
+    row of ``data`` (values of several matrices on ``P``)."""
+    from ..updating._roundoff import ROUNDOFF_REL
+
+    n = P.shape[0]
+    rows = np.repeat(np.arange(n), np.diff(P.indptr))
+    diag = rows == P.indices
+    mask = ~diag
+    for row in data:
+        d = np.zeros(n)
+        d[rows[diag]] = np.abs(row[diag])
+        mask &= np.abs(row) <= ROUNDOFF_REL * np.sqrt(d[rows] * d[P.indices])
+    return mask
 
 
 def _entry_rel(A: sp.csr_matrix, B: sp.csr_matrix) -> float:
