@@ -395,19 +395,24 @@ class ReducedBasis:
                 return None, bound, why
             if bound <= tol:
                 return np.sqrt(theta[:-1]) / (2 * np.pi), bound, "reduced"
-            # one correction step: the basis plus K0^-1 r_j (K0 Z = R is known)
+            # one correction step: the basis plus K0^-1 r_j; only these few new
+            # columns are multiplied by the sparse matrices
             dK = dec.pattern_K.copy()
             dK.data = wK[1:] @ dec.data_K[1:]
             _, M = dec.matrices(p)
-            R0 = self._deflate(R)
-            W, _ = _m_orthonormal_pair(np.column_stack([self.S, self.factor.solve(R0)]),
-                                       np.column_stack([self.Y, R0]), dec.nominal[1])
-            K0W = self.K0 @ W
-            KW = K0W + dK @ W
-            MW = M @ W
-            A = W.T @ K0W
-            Kr = (A + A.T) / 2 + W.T @ (dK @ W)
-            theta, Yr = _ritz(Kr, W.T @ MW, k)
+            Z = Z - self.Q @ (self.P.T @ R)          # = K0^-1 of the deflated residual
+            for _ in range(2):
+                Z = Z - self.S @ (self.MS0.T @ Z)
+            Z, _ = _m_orthonormal_pair(Z, Z, dec.nominal[1])
+            KZ = self.K0 @ Z + dK @ Z
+            MZ = M @ Z
+            SKZ, SMZ = self.S.T @ KZ, self.S.T @ MZ
+            ZKZ, ZMZ = Z.T @ KZ, Z.T @ MZ
+            Kr = np.block([[Kr, SKZ], [SKZ.T, (ZKZ + ZKZ.T) / 2]])
+            Mr = np.block([[Mr, SMZ], [SMZ.T, (ZMZ + ZMZ.T) / 2]])
+            KW = np.column_stack([KS, KZ])
+            MW = np.column_stack([MS, MZ])
+            theta, Yr = _ritz(Kr, Mr, k)
             if theta is None:
                 return None, np.nan, "reduced matrices not definite"
             R = KW @ Yr[:, :-1] - (MW @ Yr[:, :-1]) * theta[:-1]
