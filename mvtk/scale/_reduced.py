@@ -97,7 +97,8 @@ def _lagrange(nodes: np.ndarray, s: float) -> np.ndarray:
     return out
 
 
-_NODES = {1: np.array([-1.0, 1.0]), 3: np.array([-1.0, -1.0 / 3.0, 1.0 / 3.0, 1.0])}
+#: Interpolation nodes (scaled parameter) per degree; 0 lets the probes serve the grid.
+_NODES = {1: np.array([-1.0, 1.0]), 3: np.array([-1.0, 0.0, 0.5, 1.0])}
 
 
 class Decomposition:
@@ -206,12 +207,26 @@ class Decomposition:
                 colors.append([int(i)])
         degrees = [int(max(degree[i] for i in c)) for c in colors]
         points = cls.grid(colors, degrees)
+        # a grid point needs K at the coordinates of the parameters K depends on and M
+        # at those of M: a probe that matches both (a modulus probe gives K, a density
+        # probe M, at the thickness node 0) saves a build
+        dep = {X: np.flatnonzero(depends[X]) for X in "KM"}
+
+        def known(X, s):
+            for key, (Kb, Mb, _) in models.items():
+                if np.array_equal(np.asarray(key)[dep[X]], s[dep[X]]):
+                    return Kb if X == "K" else Mb
+            return None
+
         mats = []
         for g in points:
             s = np.zeros(n)
             for c, d, k in zip(colors, degrees, g):
                 s[c] = _NODES[d][k]
-            mats.append(at(s)[:2])
+            Kg, Mg = known("K", s), known("M", s)
+            if Kg is None or Mg is None:
+                Kg, Mg, _ = at(s)
+            mats.append((Kg, Mg))
         pattern_K = _union([K for K, _ in mats] + [K0])
         pattern_M = _union([M for _, M in mats] + [M0])
         # K(p) = K0 + sum_g w_g (K_g - K0) (the weights sum to one): the sample carries
