@@ -292,3 +292,22 @@ def test_client_local_starts_and_closes_a_process_cluster():
         out = parameter_study(STRIP, samples, n_modes=2, client="local", n_workers=2)
     np.testing.assert_allclose(out["fn_hz"].values, ref["fn_hz"].values, rtol=1e-10)
     assert out.attrs["scheduler"].startswith("tcp://")
+
+
+def test_reduced_path_on_the_cluster_gives_the_in_process_numbers(two_worker_client):
+    """Every worker builds the same reduced basis (deterministic set-up), so a study on
+    the cluster and in process agree to round-off and take the same paths."""
+    from mvtk.scale._reduced import clear_cache
+
+    rng = np.random.default_rng(8)
+    samples = {"materials.al.E": rng.normal(70e9, 2e9, 16),
+               "structure.layers.0.thickness": rng.normal(3e-3, 5e-5, 16)}
+    clear_cache()
+    local = parameter_study(STRIP, samples, n_modes=2)
+    clear_cache()
+    remote = parameter_study(STRIP, samples, n_modes=2, client=two_worker_client,
+                             batch_size=5)
+    assert local.attrs["method"] == remote.attrs["method"] == "reduced"
+    assert list(remote["path"].values) == list(local["path"].values)
+    assert local.attrs["reduced_note"] == "" and "reduced" in set(local["path"].values)
+    np.testing.assert_allclose(remote["fn_hz"].values, local["fn_hz"].values, rtol=1e-12)
