@@ -353,8 +353,8 @@ class ReducedBasis:
             phi = sol.vectors
             ph, lw = phi[:, :n_modes], lam[:n_modes]
             rhs = [dK @ ph - (dM @ ph) * lw for dK, dM in dec.derivs]
-            # every basis vector is a solve s = K0^-1 y, so K0 s = y is known without a
-            # product with K0; the centre modes enter as K0^-1 M0 phi (= phi / lambda)
+            # the centre modes enter as K0^-1 M0 phi (= phi / lambda), the derivative
+            # terms as solves of right-hand sides deflated against them
             Q, YQ = _m_orthonormal_pair(self.factor.solve(M0 @ phi), M0 @ phi, M0)
             self.Q, self.YQ = Q, YQ
             self.P = self.factor.solve(M0 @ Q)              # K0^-1 M0 Q
