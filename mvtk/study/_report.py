@@ -395,6 +395,22 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
 
 
+def _mc_paths(u: dict) -> str:
+    """How the Monte-Carlo samples were solved, with the reduced path's error bound."""
+    paths = u.get("paths") or {}
+    n_red = sum(n for p, n in paths.items() if p.startswith("reduced"))
+    if not n_red:
+        note = u.get("reduced_note") or ""
+        return ("every sample by a full eigen solve" + (f" ({note})" if note else "") + ".")
+    bound = u.get("max_error_bound")
+    bound_txt = f"{bound:.1e}" if bound is not None else "n/a"
+    return (f"{n_red} samples by Rayleigh-Ritz on a reduced basis of the centre model "
+            f"({paths.get('reduced+correction', 0)} of them after a correction step; "
+            f"Kato-Temple bound of the relative frequency error at most {bound_txt} for "
+            "the interpolated K and M, whose entries are checked against a real build to "
+            f"1e-11), {paths.get('full', 0)} by a full eigen solve.")
+
+
 def _section_uncertainty(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_fn_histogram
 
@@ -410,7 +426,8 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
              f"{u['distribution']} distributions centred on the {base} structure) propagated "
              f"to the eigenfrequencies by Monte Carlo with mvtk.scale.monte_carlo: "
              f"{u['n_samples']} samples (seed {u['seed']}, {u['scheduler']}), "
-             f"{u['n_failed']} failed. Only the scatter of the inputs named is propagated "
+             f"{u['n_failed']} failed; {_mc_paths(u)} Only the scatter of the inputs "
+             "named is propagated "
              "(no other material, geometry or boundary uncertainty, no model-form error). "
              "cov_first_order is the linearised estimate sqrt(sum (S c)^2) from the "
              "log-sensitivities S = d ln f / d ln p below; with small input scatter it "

@@ -410,6 +410,24 @@ def _first_order_cov(description: dict, scatter: dict, n_modes: int):
     return sens, np.sqrt(((sens * c[:, None]) ** 2).sum(axis=0))
 
 
+def _path_counts(samples) -> dict:
+    """Number of samples per solution path (``reduced``, ``reduced+correction``, ``full``)."""
+    if "path" not in samples:
+        return {"full": int(samples.sizes.get("sample", 0))}
+    paths, counts = np.unique(np.asarray(samples["path"].values, dtype=str),
+                              return_counts=True)
+    return {str(p) or "failed": int(c) for p, c in zip(paths, counts)}
+
+
+def _max_bound(samples) -> float | None:
+    """Largest relative frequency error bound of the reduced-path samples (None: none)."""
+    if "error_bound" not in samples:
+        return None
+    b = np.asarray(samples["error_bound"].values, dtype=float)
+    b = b[np.isfinite(b)]
+    return float(b.max()) if b.size else None
+
+
 def uncertainty(study: Study, description: dict):
     """Monte-Carlo propagation of the ``[uncertainty]`` input scatter to eigenfrequencies.
 
@@ -462,6 +480,12 @@ def uncertainty(study: Study, description: dict):
         "statistics": stats.to_dict(orient="records"),
         "n_failed": int(mc.samples.attrs.get("n_failed", 0)),
         "scheduler": str(mc.samples.attrs.get("scheduler", "")),
+        # how each sample was solved: Rayleigh-Ritz on a reduced basis (with its error
+        # bound) or a full eigen solve (mvtk.scale.parameter_study, method="auto")
+        "method": str(mc.samples.attrs.get("method", "exact")),
+        "reduced_note": str(mc.samples.attrs.get("reduced_note", "")),
+        "paths": _path_counts(mc.samples),
+        "max_error_bound": _max_bound(mc.samples),
         "warnings": _warning_messages(caught),
     }
     ds = xr.Dataset(

@@ -164,6 +164,15 @@ def test_monte_carlo_uncertainty_section(out_dir):
     assert "Monte-Carlo CoV(f1) vs first-order estimate" in checks.index
     html = (out_dir / "index.html").read_text(encoding="utf-8")
     assert "Uncertainty propagation (Monte Carlo)" in html
+    # how the samples were solved is stated with the reduced path's error bound
+    import json
+    import re
+
+    u = json.loads((out_dir / "cache" / "uncertainty.json").read_text())["result"]
+    assert sum(u["paths"].values()) == 40
+    assert u["max_error_bound"] is None or u["max_error_bound"] <= 1e-8
+    if u["method"] == "reduced":
+        assert re.search(r"\d+ samples by Rayleigh-Ritz on a reduced basis", html)
 
 
 def test_changing_a_controller_gain_reruns_only_the_control_stage(out_dir, tmp_path):
