@@ -551,6 +551,8 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
 
     timings = {s: timings[s] for s in STAGES if s in timings}
     cpu = {s: cpu[s] for s in STAGES if s in cpu}
+    # in pipeline order, whichever process computed or loaded a stage first
+    hits = tuple(s for s in STAGES if s in cache.hits)
     report_path = None
     t0, c0 = time.perf_counter(), time.process_time()
     if report:
@@ -558,7 +560,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
 
         partial = StudyResult(study=study, out_dir=out, report_path=None, results=results,
                               arrays=arrays, unavailable=dict(unavailable),
-                              failed=dict(failed), cache_hits=tuple(cache.hits),
+                              failed=dict(failed), cache_hits=hits,
                               timings_s=dict(timings))
         report_path = build_report(partial, hashes)
     timings["report"] = time.perf_counter() - t0
@@ -568,4 +570,4 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
     bar.close()
     return StudyResult(study=study, out_dir=out, report_path=report_path, results=results,
                        arrays=arrays, unavailable=unavailable, failed=failed,
-                       cache_hits=tuple(cache.hits), timings_s=timings, cpu_s=cpu)
+                       cache_hits=hits, timings_s=timings, cpu_s=cpu)
