@@ -55,16 +55,23 @@ __all__ = [
 BACKENDS = ("auto", "superlu", "cholmod")
 #: BLAS threads used inside factorisations and eigen solves (None: leave as is).
 BLAS_THREADS: int | None = 1
-#: Block width of the block Lanczos method of :func:`eigsh_lowest` (``method="block"``).
-#: Not the default: on the 49 140-DOF plate it needed 42 solves (14 blocks of 3) where
-#: ARPACK needs 34, and a block of k right-hand sides costs 0.3-0.8 of k single solves
-#: (SuperLU and the CHOLMOD wheel, measured, docs/guide/fe.md), so it was not faster.
-BLOCK_SIZE = 3
+#: Block width of the block Lanczos method of :func:`eigsh_lowest` (the default method).
+#: Measured on the 49 140-DOF plate (CHOLMOD, simplicial solves, iteration only, CPU,
+#: load 4-5): 10 modes, ARPACK 34 solves 0.99-1.12 s; blocks of 1, 2, 3, 4: 27, 36, 45,
+#: 52 vectors, 0.76, 0.75, 0.71-0.82, 0.77-0.85 s; 4 modes: ARPACK 21 solves 0.74 s,
+#: blocks of 1, 2: 15, 22 vectors, 0.49, 0.50 s. A block of 2 finds both copies of a
+#: double eigenvalue (symmetric structures) without relying on round-off, at the cost of
+#: one with single vectors. (With the supernodal solves of the CHOLMOD wheel, before
+#: :data:`CHOLMOD_SIMPLICIAL`, a block of k right-hand sides cost 0.7-0.9 of k single
+#: solves and the block method lost to ARPACK.)
+BLOCK_SIZE = 2
 #: Default relative eigenvalue tolerance of :func:`eigsh_lowest` (see its docstring).
 #: 0 is ARPACK's machine precision. A looser 1e-10 (28 instead of 34-41 solves on the
 #: 90 x 90 plate) converged before every copy of a repeated eigenvalue had emerged (the
 #: 7-fold 17.709 Hz mode of NAFEMS FV2 came out 6-fold): Lanczos from one start vector
 #: finds the copies of a repeated eigenvalue only through round-off, so it must run on.
+#: (The block method of the default finds up to :data:`BLOCK_SIZE` copies without
+#: round-off; the Sturm check covers the others.)
 DEFAULT_TOL = 0.0
 #: Solve with CHOLMOD's simplicial form of the factor: after the supernodal
 #: factorisation, the factor is converted in place to simplicial LL' (the same entries,
@@ -693,8 +700,9 @@ def eigsh_lowest(
 ) -> EigenSolution:
     """Lowest ``n`` eigenpairs of the generalised symmetric problem by shift-invert.
 
-    One factorisation of ``K - sigma M`` is made and passed to ARPACK's Lanczos
-    (``scipy.sparse.linalg.eigsh``) as ``OPinv``, with a deterministic start vector and
+    One factorisation of ``K - sigma M`` is made and used by a shift-invert Lanczos
+    (by default the block Lanczos of :mod:`mvtk.fe._block_eigen`, or ARPACK's
+    ``scipy.sparse.linalg.eigsh`` with ``OPinv``), with a deterministic start and
     BLAS threads limited to :data:`BLAS_THREADS`. For free-free structures pass a
     negative ``sigma`` (default: a small negative shift scaled to the problem, so
     rigid-body modes are found too).
@@ -717,9 +725,10 @@ def eigsh_lowest(
         Relative accuracy requested for the eigenvalues: ARPACK stops when every Ritz
         value ``theta`` of ``(K - sigma M)^-1 M`` has a residual below ``tol |theta|``,
         which bounds the relative error of ``omega2 - sigma`` by ``tol`` (in practice
-        the error is quadratic in the residual, far smaller). Default
-        :data:`DEFAULT_TOL` = 0, machine precision: a looser tolerance saves a few solves
-        but can stop before every copy of a repeated eigenvalue has emerged.
+        the error is quadratic in the residual, far smaller); the block method stops at
+        residuals below ``sqrt(tol)`` (see ``method``). Default :data:`DEFAULT_TOL` = 0,
+        machine precision: with ARPACK a looser tolerance saves a few solves but can stop
+        before every copy of a repeated eigenvalue has emerged.
     singular_shift : float or callable, optional
         Shift to use instead of the default one when K turns out singular (a caller that
         knows the scale of the first elastic mode, e.g. from a trial field, passes it),
@@ -735,8 +744,12 @@ def eigsh_lowest(
         ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:data:`BLOCK_SIZE`
         vectors per solve, full M-orthogonalisation, no restart), accepted when every
         Ritz residual is below ``sqrt(tol)`` (1e-10 for ``tol=0``) relative to its Ritz
-        value. ``"auto"``: ARPACK, which measured faster (see :data:`BLOCK_SIZE`). Both
-        keep the Sturm check for missed copies of repeated eigenvalues.
+        value; the returned Rayleigh quotients are then as accurate as ARPACK's to
+        machine precision (on the 49 140-DOF plate both differ from each other by
+        5e-11-6e-10, as ARPACK's own results do between the two backends, 8e-11, and
+        between 4 and 10 modes requested, 3e-10: the round-off of the factorisation).
+        ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
+        Both keep the Sturm check for missed copies of repeated eigenvalues.
 
     Returns
     -------
@@ -778,7 +791,7 @@ def eigsh_lowest(
             M = M.copy()
             M.eliminate_zeros()
         if method == "auto":
-            method = "arpack"
+            method = "block"
         used_method = method
         k = n
         if method == "block":
@@ -793,7 +806,7 @@ def eigsh_lowest(
                 with _blas_limits():
                     theta, v, _ = block_lanczos(
                         lu.solve, M, k, start, res_tol,
-                        max_basis=min(ndof, max(40 * start.shape[1], 4 * k + 40)))
+                        max_basis=min(ndof, max(60 * start.shape[1], 8 * k + 40)))
                 w = sigma + 1.0 / theta
             else:
                 try:
