@@ -80,6 +80,7 @@ DEFAULT_TOL = 0.0
 #: 21 ms of CPU against 27-30 ms for one right-hand side, and 9-13 ms against 20-25 ms
 #: per right-hand side for 2-50 of them (CHOLMOD's simplicial kernels take up to 4 at a
 #: time). Residuals equal to round-off (1e-14 relative difference of the solutions).
+#: While converting, CHOLMOD holds both forms of the factor (a transient peak).
 CHOLMOD_SIMPLICIAL = True
 
 _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
@@ -395,24 +396,25 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     size = np.bincount(group)[group]
     pos = np.arange(n) - first
     kinds, kind = np.unique(size * 64 + np.minimum(pos, 63), return_inverse=True)
-    kind = kind.ravel()
     nk = len(kinds)
     if nk < 2:
         return A
-    kr = kind[A.indices]
-    kc = np.repeat(kind, length)
-    nz = A.data != 0
-    link = np.bincount(kr[nz] * nk + kc[nz], minlength=nk * nk).reshape(nk, nk) > 0
+    kind = kind.ravel().astype(np.int32)
+    # kind pairs linked by a nonzero entry (rows and columns of the nonzeros only)
+    nz = np.flatnonzero(A.data)
+    col = np.repeat(kind, length)
+    link = np.bincount(kind[A.indices[nz]].astype(np.int64) * nk + col[nz],
+                       minlength=nk * nk).reshape(nk, nk) > 0
     _, comp = sp.csgraph.connected_components(sp.csr_matrix(link | link.T),
                                               directed=False)
-    keep = comp[kr] == comp[kc]
+    ck = comp[kind]
+    keep = ck[A.indices] == np.repeat(ck, length)
     if np.all(keep):
         return A
-    count = np.zeros(n, dtype=np.int64)
-    count[nzc] = np.add.reduceat(keep.astype(np.int64), A.indptr[:-1][nzc])
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(count, out=indptr[1:])
-    out = sp.csc_matrix((A.data[keep], A.indices[keep], indptr.astype(A.indptr.dtype)),
+    take = np.flatnonzero(keep)
+    # entries kept before each column's start: the new column pointers
+    indptr = np.searchsorted(take, A.indptr)
+    out = sp.csc_matrix((A.data[take], A.indices[take], indptr.astype(A.indptr.dtype)),
                         shape=A.shape)
     out.has_sorted_indices = True
     return out
@@ -509,14 +511,14 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
                         f"matrix of size {A.shape[0]} is not positive definite "
                         "(CHOLMOD): " + singular) from err
             else:
+                if CHOLMOD_SIMPLICIAL:
+                    _to_simplicial(f)
                 # CHOLMOD may factorise a singular matrix with a round-off pivot; a solve
                 # round trip tells (then SuperLU decides, with its exact-zero pivots)
                 x0 = np.random.default_rng(1).standard_normal(A.shape[0])
                 x = f.solve_A(A @ x0)
                 if np.all(np.isfinite(x)) and (
                         np.linalg.norm(x - x0) <= 1e-2 * np.linalg.norm(x0)):
-                    if CHOLMOD_SIMPLICIAL:
-                        _to_simplicial(f)
                     # CHOLMOD's binding takes C-ordered right-hand sides only
                     return Factorization(
                         "cholmod", A.shape,
@@ -918,7 +920,8 @@ class MemoryEstimate:
     solve : int
         Bytes the eigen step adds on top: SuperLU's storage
         (:data:`FACTOR_BYTES_PER_NNZ` per stored entry), two working copies of K
-        (CSC and permuted) and the Lanczos basis and returned vectors.
+        (CSC and permuted) and the Lanczos basis (with its M-image) and returned
+        vectors.
     total : int
         ``matrices + solve``.
     """
@@ -1022,9 +1025,11 @@ def estimate_eigen_memory(
     nnz_factor = int(np.sum(s[L.row[off_l]] * s[L.col[off_l]])
                      + np.sum(s[U.row[off_u]] * s[U.col[off_u]])
                      + np.sum(s * s + s))
-    ncv = min(n_dof, max(2 * n_modes + 1, 20))
+    # the block Lanczos basis and its M-image (first allocation; it grows only when
+    # the convergence needs more)
+    basis = 2 * min(n_dof, max(4 * n_modes + 4 * BLOCK_SIZE, 32))
     matrices = 2 * (nnz_matrix * 12 + (n_dof + 1) * 4)
     solve = (int(FACTOR_BYTES_PER_NNZ * nnz_factor) + 2 * nnz_matrix * 12
-             + (ncv + 3 * n_modes + 6) * n_dof * 8)
+             + (basis + 3 * n_modes + 6) * n_dof * 8)
     return MemoryEstimate(n_dof=n_dof, nnz_matrix=nnz_matrix, nnz_factor=nnz_factor,
                           matrices=matrices, solve=solve, total=matrices + solve)
