@@ -823,7 +823,7 @@ def eigsh_lowest(
                     ) from err
             order = np.argsort(w)
             w, v = w[order], v[:, order]
-            missing = _missed_copies(K, M, w[:n])
+            missing = _missed_copies(K, M, w[:n], sigma)
             n_fact += missing is not None
             if not missing:
                 break
@@ -865,19 +865,29 @@ def eigsh_lowest(
                          backend=used, method=used_method)
 
 
-def _clustered(w: np.ndarray) -> bool:
-    """True when two eigenvalues agree to 1e-6 (relative): a repeated eigenvalue."""
+def _cluster_scale(w: np.ndarray, sigma: float) -> np.ndarray:
+    """Distance of each eigenvalue from the shift (floored): closeness is judged relative
+    to it, as the shift-inverted operator sees the eigenvalues (``1 / (w - sigma)``), so
+    the round-off values of rigid-body modes near 0 below a negative shift cluster too."""
+    d = np.abs(w - sigma)
+    return np.maximum(d, d.max() * 1e-12)
+
+
+def _clustered(w: np.ndarray, sigma: float = 0.0) -> bool:
+    """True when two eigenvalues agree to 1e-6 relative to their distance from the shift
+    ``sigma``: a repeated eigenvalue."""
     if w.size < 2:
         return False
-    scale = np.maximum(np.abs(w[1:]), np.abs(w).max() * 1e-12)
-    return bool(np.any(np.diff(w) <= 1e-6 * scale))
+    return bool(np.any(np.diff(w) <= 1e-6 * _cluster_scale(w, sigma)[1:]))
 
 
-def _missed_copies(K, M, w: np.ndarray) -> int | None:
+def _missed_copies(K, M, w: np.ndarray, sigma: float = 0.0) -> int | None:
     """Eigenvalues of ``(K, M)`` below the highest cluster of ``w`` that Lanczos missed.
 
     Checked only when ``w`` holds a repeated eigenvalue (a symmetric structure, rigid
-    modes), the case in which single-vector Lanczos can return fewer copies than exist.
+    modes: see :func:`_clustered`), the case in which Lanczos can return fewer copies than
+    exist (single-vector Lanczos finds them only through round-off, a block of ``b``
+    vectors ``b`` of them).
     Sylvester's law of inertia: the number of negative pivots of the symmetric
     factorisation of ``K - tau M`` (SuperLU, diagonal pivots in a symmetric ordering)
     is the number of eigenvalues below ``tau``. ``tau`` is just below the highest
@@ -885,9 +895,9 @@ def _missed_copies(K, M, w: np.ndarray) -> int | None:
     missing). Returns None when not checked (no cluster, nothing below the top cluster,
     or ``K - tau M`` singular).
     """
-    if not _clustered(w):
+    if not _clustered(w, sigma):
         return None
-    scale = np.maximum(np.abs(w), np.abs(w).max() * 1e-12)
+    scale = _cluster_scale(w, sigma)
     top = w.size - 1
     while top > 0 and w[top] - w[top - 1] <= 1e-6 * scale[top]:
         top -= 1
