@@ -738,7 +738,7 @@ def eigsh_lowest(
     v0 : ndarray, shape (n_dof,) or (n_dof, k), optional
         Warm start: eigenvectors of a nearby model (model updating, Monte Carlo,
         parameter studies). The Lanczos start vector is built from them (see
-        :func:`_start_vector`), which cuts the number of solves.
+        :func:`_start_vector` and :func:`_start_block`), which cuts the number of solves.
     backend : {"auto", "superlu", "cholmod"}
         See :func:`factorize`.
     method : {"auto", "arpack", "block"}
@@ -746,10 +746,11 @@ def eigsh_lowest(
         ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:data:`BLOCK_SIZE`
         vectors per solve, full M-orthogonalisation, no restart), accepted when every
         Ritz residual is below ``sqrt(tol)`` (1e-10 for ``tol=0``) relative to its Ritz
-        value; the returned Rayleigh quotients are then as accurate as ARPACK's to
-        machine precision (on the 49 140-DOF plate both differ from each other by
+        value; the returned Rayleigh quotients are then as accurate as ARPACK's with
+        ``tol=0``, at the round-off floor of the factorisation (on the 49 140-DOF plate
+        both differ from each other by
         5e-11-6e-10, as ARPACK's own results do between the two backends, 8e-11, and
-        between 4 and 10 modes requested, 3e-10: the round-off of the factorisation).
+        between 4 and 10 modes requested, 3e-10).
         ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
         Both keep the Sturm check for missed copies of repeated eigenvalues.
 
