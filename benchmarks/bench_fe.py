@@ -16,10 +16,11 @@ against the thin-plate reference (Leissa, NASA SP-160, 1969, CFFF square plate,
 nu = 0.3: lambda = 3.492, 8.525, 21.43, 27.33, 31.11 as Ritz upper bounds) and against
 each other, and the practical limit of shift-invert Lanczos on this matrix: one
 factorisation plus 2 x n_modes solves, measured in the same process, with the ratio of
-mvtk's eigen step to it and the number of solves ARPACK used; beside it the block
-variant of that limit (the 2 x n_modes right-hand sides in one solve) and the block
-Lanczos eigen step (``method="block"``, not the default), and in the first round the
-CPU per right-hand side of one solve with k = 1, 3, 10, 20 of them. The frequencies are
+mvtk's eigen step to it and the number of right-hand sides and solves its Lanczos
+used; beside it the block variant of that limit (the 2 x n_modes right-hand sides in
+one solve) and the other Lanczos (ARPACK, ``method="arpack"``, when the default is the
+block method), and in the first round the CPU per right-hand side of one solve with
+k = 1, 3, 10, 20 of them. The frequencies are
 compared with OpenSees twice: mvtk with OpenSees' formulation on the same mesh
 (drilling penalty A66, ``drill_factor=1``, and no shell rotary inertia, as ShellMITC4),
 target 1e-4, and mvtk's default formulation (a modelling difference). The first round also
@@ -70,6 +71,7 @@ def _since(t):
 
 def child_mvtk(n: int, n_modes: int, fill: bool) -> dict:
     import mvtk.fe as fe
+    from mvtk.fe._solvers import BLOCK_SIZE
 
     out: dict = {"load_before": os.getloadavg()[0]}
     steel = fe.IsotropicMaterial("steel", E, NU, RHO)
@@ -91,6 +93,12 @@ def child_mvtk(n: int, n_modes: int, fill: bool) -> dict:
     for _ in range(2 * n_modes):
         lu.solve(b)
     out["solves_2n_s"], out["solves_2n_cpu"] = _since(t)
+    # one solve with as many right-hand sides as the block Lanczos of the default uses
+    Bw = np.random.default_rng(0).standard_normal((model.n_dof, BLOCK_SIZE))
+    t = _clock()
+    for _ in range(10):
+        lu.solve(Bw)
+    out["width_solve_cpu"] = _since(t)[1] / 10
     # the same 2 n_modes right-hand sides as one block (BLAS-3 in the factor's sweeps)
     B = np.random.default_rng(0).standard_normal((model.n_dof, 2 * n_modes))
     t = _clock()
@@ -113,11 +121,15 @@ def child_mvtk(n: int, n_modes: int, fill: bool) -> dict:
     out["n_solves"] = sol.n_solves
     out["n_factorizations"] = sol.n_factorizations
     out["method"] = sol.method
+    width = BLOCK_SIZE if sol.method == "block" else 1
+    out["n_block_solves"] = -(-sol.n_solves // width)
+    # the other Lanczos (ARPACK when the default is the block method), same accuracy
+    out["alt_method"] = "arpack" if sol.method == "block" else "block"
     t = _clock()
-    blk = fe.eigsh_lowest(model.K, model.M, n_modes, method="block")
-    out["block_eigsh_s"], out["block_eigsh_cpu"] = _since(t)
-    out["block_n_solves"] = blk.n_solves
-    out["block_fn_rel_diff"] = float(np.max(np.abs(blk.omega2 / sol.omega2 - 1)))
+    alt = fe.eigsh_lowest(model.K, model.M, n_modes, method=out["alt_method"])
+    out["alt_eigsh_s"], out["alt_eigsh_cpu"] = _since(t)
+    out["alt_n_solves"] = alt.n_solves
+    out["alt_fn_rel_diff"] = float(np.max(np.abs(alt.omega2 / sol.omega2 - 1)))
     if fill:
         # OpenSees' formulation on the same mesh: its drilling penalty (gamma_d = A66,
         # drill_factor=1: K identical, tests/fe/test_opensees_stiffened.py) and no shell
@@ -303,12 +315,13 @@ def main() -> None:
         line = (f"round {k + 1}: mvtk [{mv['backend']}] assembly {mv['assembly_s']:.2f} s + "
                 f"modal {mv['modal_s']:.2f} s = {total:.2f} s (cpu "
                 f"{mv['assembly_cpu'] + mv['modal_cpu']:.2f} s); eigsh [{mv['method']}] "
-                f"{mv['eigsh_s']:.2f} s with {mv['n_solves']} solves, limit (1 factorisation "
+                f"{mv['eigsh_s']:.2f} s with {mv['n_solves']} right-hand sides in "
+                f"{mv['n_block_solves']} solves, limit (1 factorisation "
                 f"{mv['factorize_s']:.2f} s + {2 * args.modes} solves {mv['solves_2n_s']:.2f}"
                 f" s) {limit:.2f} s -> {mv['eigsh_s'] / limit:.2f}x; block variant of the "
                 f"limit (the {2 * args.modes} as one block solve {mv['block_2n_s']:.2f} s) "
-                f"{blimit:.2f} s; block Lanczos {mv['block_eigsh_s']:.2f} s with "
-                f"{mv['block_n_solves']} solves; load {mv['load_before']:.1f}")
+                f"{blimit:.2f} s; {mv['alt_method']} {mv['alt_eigsh_s']:.2f} s with "
+                f"{mv['alt_n_solves']} right-hand sides; load {mv['load_before']:.1f}")
         if op is not None:
             line += (f"\n         OpenSeesPy eigen {op['eigen_s']:.2f} s (cpu "
                      f"{op['eigen_cpu']:.2f} s), ratio {op['eigen_s'] / total:.1f}x wall, "
@@ -322,8 +335,8 @@ def main() -> None:
     med = {key: float(np.median([r[0][key] for r in rounds]))
            for key in ("assembly_s", "modal_s", "factorize_s", "solves_2n_s", "eigsh_s",
                        "assembly_cpu", "modal_cpu", "factorize_cpu", "solves_2n_cpu",
-                       "eigsh_cpu", "block_2n_s", "block_2n_cpu", "block_eigsh_s",
-                       "block_eigsh_cpu")}
+                       "eigsh_cpu", "block_2n_s", "block_2n_cpu", "alt_eigsh_s",
+                       "alt_eigsh_cpu")}
     total = med["assembly_s"] + med["modal_s"]
     limit_ratio = float(np.median([r[0]["eigsh_s"] / (r[0]["factorize_s"]
                                                        + r[0]["solves_2n_s"])
@@ -333,26 +346,31 @@ def main() -> None:
                                    for r in rounds]))
     fn = np.array(mv0["fn_hz"])
     print(f"mvtk MITC4: {args.n}x{args.n} elements, {mv0['n_dof']} free DOF, backend "
-          f"{mv0['backend']}, eigen solver {mv0['method']}, {mv0['n_solves']} solves, "
-          f"{mv0['n_factorizations']} factorisation(s)")
+          f"{mv0['backend']}, eigen solver {mv0['method']}, {mv0['n_solves']} right-hand "
+          f"sides in {mv0['n_block_solves']} solves, {mv0['n_factorizations']} "
+          "factorisation(s)")
     print(f"  median of {args.repeats}: assembly {med['assembly_s']:.2f} s, modal "
           f"{med['modal_s']:.2f} s, total {total:.2f} s; eigen step / (1 factorisation + "
           f"{2 * args.modes} single solves) = {limit_ratio:.2f} (target <= 1.5); against "
           f"the block variant (1 factorisation + one solve of {2 * args.modes} right-hand "
           f"sides) {block_ratio:.2f}")
-    print(f"  block Lanczos (method='block', not the default): eigen step "
-          f"{med['block_eigsh_s']:.2f} s (cpu {med['block_eigsh_cpu']:.2f} s) with "
-          f"{mv0['block_n_solves']} solves vs {mv0['method']} {med['eigsh_s']:.2f} s (cpu "
-          f"{med['eigsh_cpu']:.2f} s) with {mv0['n_solves']}; eigenvalues agree to "
-          f"{mv0['block_fn_rel_diff']:.1e}")
+    print(f"  {mv0['alt_method']} (method='{mv0['alt_method']}', not the default): eigen "
+          f"step {med['alt_eigsh_s']:.2f} s (cpu {med['alt_eigsh_cpu']:.2f} s) with "
+          f"{mv0['alt_n_solves']} right-hand sides vs {mv0['method']} {med['eigsh_s']:.2f} s "
+          f"(cpu {med['eigsh_cpu']:.2f} s) with {mv0['n_solves']}; eigenvalues agree to "
+          f"{mv0['alt_fn_rel_diff']:.1e}")
     print("  CPU per right-hand side, one solve with k of them: " + ", ".join(
         f"k={k}: {1e3 * v:.1f} ms" for k, v in mv0["per_rhs_cpu"].items()))
-    # where the CPU goes (medians; a solve costs solves_2n / 2 n_modes)
-    per_solve = med["solves_2n_cpu"] / (2 * args.modes)
-    solves = per_solve * mv0["n_solves"]
+    # where the CPU goes (medians; a single solve costs solves_2n / 2 n_modes, a solve
+    # with the block width of the default method width_solve_cpu)
+    if mv0["method"] == "block":
+        solves = float(np.median([r[0]["width_solve_cpu"] for r in rounds])) \
+            * mv0["n_block_solves"]
+    else:
+        solves = med["solves_2n_cpu"] / (2 * args.modes) * mv0["n_solves"]
     print(f"  CPU breakdown: assembly {med['assembly_cpu']:.2f} s; eigen step "
           f"{med['eigsh_cpu']:.2f} s = factorisation {med['factorize_cpu']:.2f} s + "
-          f"{mv0['n_solves']} solves {solves:.2f} s + ARPACK and M products "
+          f"{mv0['n_block_solves']} solves {solves:.2f} s + Lanczos and M products "
           f"{med['eigsh_cpu'] - med['factorize_cpu'] - solves:.2f} s; modal_analysis "
           f"beyond the eigen step (mode labels, rigid-mode check) "
           f"{med['modal_cpu'] - med['eigsh_cpu']:.2f} s")
@@ -371,7 +389,9 @@ def main() -> None:
                            "median_total_s": total, "limit_ratio": limit_ratio,
                            "block_limit_ratio": block_ratio,
                            "per_rhs_cpu": mv0["per_rhs_cpu"],
-                           "block_n_solves": mv0["block_n_solves"],
+                           "alt_method": mv0["alt_method"],
+                           "alt_n_solves": mv0["alt_n_solves"],
+                           "alt_fn_rel_diff": mv0["alt_fn_rel_diff"],
                            "fill_metis": mv0["superlu_metis_fill"],
                            "fill_mmd": mv0["superlu_mmd_fill"],
                            "superlu_eigsh_s": mv0.get("superlu_eigsh_s"),

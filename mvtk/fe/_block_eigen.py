@@ -18,7 +18,13 @@ of order ``tol^2 |theta| / gap`` (relative to the spectrum of OP), far below ``t
 
 A block method finds up to ``b`` copies of a repeated eigenvalue from a random start
 block (single-vector Lanczos only through round-off); :func:`mvtk.fe.eigsh_lowest`
-still makes its Sturm count on clusters.
+still makes its Sturm count on clusters. When the Krylov space reaches an invariant
+subspace (exact repeated eigenvalues of small or symmetric models, or the whole range
+of OP when M is singular), the lost directions are replaced by pseudo-random ones, as
+ARPACK does, so a start that misses a wanted eigenvector does not end the search.
+
+This is the default eigen solver of :func:`mvtk.fe.eigsh_lowest` (block width
+:data:`mvtk.fe._solvers.BLOCK_SIZE`, measured there).
 """
 
 from __future__ import annotations
@@ -31,31 +37,32 @@ from ..errors import ConvergenceError
 __all__ = ["block_lanczos"]
 
 
-def _m_orthonormalize(W, MW):
+def _m_orthonormalize(W, MW, floor: float = 0.0):
     """M-orthonormal basis of ``W`` (Cholesky QR; rank-deficient directions, an
-    invariant subspace reached, are dropped). Returns ``(V, MV, R)`` with ``W = V R``
-    (``R`` upper triangular, or with fewer rows than columns when directions are
-    dropped)."""
+    invariant subspace reached, are dropped, as are directions of M-norm below
+    ``floor``). Returns ``(V, MV, R)`` with ``W = V R`` (``R`` upper triangular, or with
+    fewer rows than columns when directions are dropped)."""
     G = W.T @ MW
     G = 0.5 * (G + G.T)
     try:
         R = sla.cholesky(G, lower=False)
-        if np.min(np.abs(np.diag(R))) > 1e-10 * np.max(np.abs(np.diag(R))):
-            V = sla.solve_triangular(R, W.T, trans="T", lower=False).T
-            MV = sla.solve_triangular(R, MW.T, trans="T", lower=False).T
-            return V, MV, R
+        dr = np.abs(np.diag(R))
+        if np.min(dr) > max(1e-10 * np.max(dr), floor):
+            Rinv = sla.solve_triangular(R, np.eye(R.shape[0]), lower=False)
+            return _gemm(1.0, W, Rinv), _gemm(1.0, MW, Rinv), R
     except np.linalg.LinAlgError:
         pass
     # rank-deficient: eigen-decomposition of the Gram matrix
     d, Q = np.linalg.eigh(G)
-    keep = d > 1e-20 * max(d.max(), 1e-300)
+    keep = d > max(1e-20 * max(d.max(), 1e-300), floor**2)
     V = (W @ Q[:, keep]) / np.sqrt(d[keep])
     MV = (MW @ Q[:, keep]) / np.sqrt(d[keep])
     R = np.sqrt(d[keep])[:, None] * Q[:, keep].T
     return V, MV, R
 
 
-def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: int):
+def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: int,
+                  seed: int = 0):
     """Largest ``n`` eigenpairs of ``OP = solve(M .)`` by block Lanczos (see module).
 
     Parameters
@@ -71,6 +78,9 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
         Relative residual accepted (see module docstring); > 0.
     max_basis : int
         Largest basis size before :class:`~mvtk.errors.ConvergenceError`.
+    seed : int
+        Seed of the pseudo-random vectors that replace the directions a block loses when
+        the Krylov space reaches an invariant subspace (deterministic).
 
     Returns
     -------
@@ -80,55 +90,113 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
         M-orthonormal Ritz vectors.
     n_steps : int
         Block solves made (including the one applied to the start block).
+
+    Notes
+    -----
+    The basis ``V`` and ``M V`` are kept in preallocated Fortran-ordered arrays (grown
+    by doubling), so a step costs one block solve, one product of ``M`` with the block
+    and two passes of classical Gram-Schmidt against the basis (BLAS-2/3). When the new
+    block loses directions (an invariant subspace: e.g. every copy of a repeated
+    eigenvalue in the start block's span already found), pseudo-random directions in
+    the range of OP, M-orthogonal to the basis, take their place, as ARPACK does, and
+    convergence is not tested on that step (a Ritz pair of an invariant subspace has a
+    zero residual but may not be among the largest).
     """
+    ndof, b = start.shape
     # start in the range of OP (as ARPACK's mode 3 does): components in the null space
     # of a singular M would otherwise ride along in the Ritz vectors
-    W = solve(M @ start)
-    out = _m_orthonormalize(W, M @ W)
-    V, MV, _ = out
-    blocks_V, blocks_MV = [V], [MV]
-    cols: list[np.ndarray] = []         # block columns of T = V' M OP V
+    W = np.asfortranarray(solve(_mprod(M, start)))
+    V0, MV0, _ = _m_orthonormalize(W, _mprod(M, W))
+    cap = min(ndof, max_basis + b, max(4 * n + 4 * b, 32))
+    V = np.empty((ndof, cap), order="F")
+    MV = np.empty((ndof, cap), order="F")
+    T = np.zeros((cap, cap))
+    m = V0.shape[1]
+    V[:, :m], MV[:, :m] = V0, MV0
+    lo = 0                               # current block: columns lo:m
     n_steps = 1
+    rng = np.random.default_rng(seed + 1)
     while True:
-        Vj, MVj = blocks_V[-1], blocks_MV[-1]
-        W = solve(MVj)
+        W = np.asfortranarray(solve(np.ascontiguousarray(MV[:, lo:m])))
         n_steps += 1
-        Vall = np.hstack(blocks_V)
-        MVall = np.hstack(blocks_MV)
-        C = MVall.T @ W
-        W = W - Vall @ C
-        C2 = MVall.T @ W
-        W = W - Vall @ C2
-        C = C + C2
-        MW = M @ W
-        out = _m_orthonormalize(W, MW)
-        Vn, MVn, R = out
-        m = Vall.shape[1]
-        cols.append((C, R[: Vn.shape[1]]))
-        # projected matrix on span(Vall): block columns C (rows 0..m), symmetrised
-        T = np.zeros((m, m))
-        off = 0
-        for Cj, Rj in cols[:-1]:
-            w = Cj.shape[1]
-            T[: Cj.shape[0], off:off + w] = Cj
-            T[Cj.shape[0]: Cj.shape[0] + Rj.shape[0], off:off + w] = Rj
-            off += w
-        T[:, off:] = C
-        T = 0.5 * (T + T.T)
-        theta, Y = np.linalg.eigh(T)
+        Vm, MVm = V[:, :m], MV[:, :m]
+        # classical Gram-Schmidt twice, as BLAS-3 calls on the Fortran-ordered basis
+        # (numpy's V @ C was 3-4x slower on it)
+        C = _gemm(1.0, MVm, W, trans_a=True)
+        W = _gemm(-1.0, Vm, C, beta=1.0, c=W)
+        C2 = _gemm(1.0, MVm, W, trans_a=True)
+        W = _gemm(-1.0, Vm, C2, beta=1.0, c=W)
+        C += C2
+        # a direction whose M-norm fell below 1e-10 of the block's norm before the
+        # orthogonalisation (|w|^2 = |w_orth|^2 + |C|^2) is in the basis' span: lost
+        MW = _mprod(M, W)
+        before = np.sqrt(np.einsum("ij,ij->j", W, MW) + np.einsum("ij,ij->j", C, C))
+        Vn, MVn, R = _m_orthonormalize(W, MW, floor=1e-10 * float(np.max(before)))
+        r = Vn.shape[1]
+        T[:m, lo:m] = C
+        # projected matrix on span(V[:, :m]), symmetrised
+        Tm = 0.5 * (T[:m, :m] + T[:m, :m].T)
+        theta, Y = np.linalg.eigh(Tm)
         theta, Y = theta[::-1], Y[:, ::-1]
-        # residual norms: R (rows for the new block) times the last block of y
-        last = Y[m - Vj.shape[1]:, :n]
-        res = np.linalg.norm(R[: Vn.shape[1]] @ last, axis=0) if Vn.shape[1] else \
-            np.zeros(min(n, m))
-        if m >= n and np.all(res[:n] <= tol * np.abs(theta[:n])):
-            X = Vall @ Y[:, :n]
-            return theta[:n], X, n_steps
+        # residual norms: R (rows for the new block) times the block lo:m of y
+        nn = min(n, m)
+        res = (np.linalg.norm(R[:r] @ Y[lo:m, :nn], axis=0) if r else np.zeros(nn))
+        lost = r < m - lo
+        if m >= n and not (lost and m < ndof) and np.all(res <= tol * np.abs(theta[:n])):
+            return theta[:n], _gemm(1.0, Vm, np.asfortranarray(Y[:, :n])), n_steps
+        if lost and m + r < ndof:
+            # invariant subspace reached in some directions: continue with pseudo-random
+            # ones in the range of OP, M-orthogonal to the basis and to the new block
+            k = min(m - lo - r, ndof - m - r)
+            Z = np.asfortranarray(solve(_mprod(M, rng.standard_normal((ndof, k)))))
+            n_steps += 1
+            znorm = np.sqrt(np.abs(np.einsum("ij,ij->j", Z, _mprod(M, Z))))
+            basis = np.hstack([Vm, Vn]) if r else Vm
+            mbasis = np.hstack([MVm, MVn]) if r else MVm
+            for _ in range(2):
+                Z -= basis @ (mbasis.T @ Z)
+            # none left when the basis spans the range of OP (singular M: its rank)
+            Vz, MVz, _ = _m_orthonormalize(Z, _mprod(M, Z),
+                                           floor=1e-10 * float(np.max(znorm)))
+            Vn, MVn = np.hstack([Vn, Vz]), np.hstack([MVn, MVz])
         if m + Vn.shape[1] > max_basis or Vn.shape[1] == 0:
-            if m >= n and Vn.shape[1] == 0:      # invariant subspace: exact
-                return theta[:n], Vall @ Y[:, :n], n_steps
+            if m >= n and Vn.shape[1] == 0:      # the whole space: exact
+                return theta[:n], _gemm(1.0, Vm, np.asfortranarray(Y[:, :n])), n_steps
             raise ConvergenceError(
                 f"block Lanczos: {int(np.sum(res[:n] > tol * np.abs(theta[:n])))} of {n} "
                 f"eigenpairs not converged with a basis of {m} vectors")
-        blocks_V.append(Vn)
-        blocks_MV.append(MVn)
+        mn = m + Vn.shape[1]
+        if mn > cap:
+            cap = min(ndof, max_basis + b, max(2 * cap, mn))
+            V, MV = _grow(V, cap), _grow(MV, cap)
+            T2 = np.zeros((cap, cap))
+            T2[:m, :m] = T[:m, :m]
+            T = T2
+        T[m:m + r, lo:m] = R[:r]
+        V[:, m:mn], MV[:, m:mn] = Vn, MVn
+        lo, m = m, mn
+
+
+def _mprod(M, W: np.ndarray) -> np.ndarray:
+    """``M @ W`` column by column, Fortran-ordered (scipy's product of a CSR matrix with
+    a block of vectors was 2-3x slower than one product per column, measured)."""
+    out = np.empty(W.shape, order="F")
+    for j in range(W.shape[1]):
+        out[:, j] = M @ W[:, j]
+    return out
+
+
+def _gemm(alpha: float, A: np.ndarray, B: np.ndarray, trans_a: bool = False,
+          beta: float = 0.0, c: np.ndarray | None = None) -> np.ndarray:
+    """``alpha op(A) B + beta c`` by BLAS dgemm (``c`` Fortran-ordered, overwritten)."""
+    if c is None:
+        return sla.blas.dgemm(alpha, A, B, trans_a=int(trans_a))
+    return sla.blas.dgemm(alpha, A, B, beta=beta, c=c, trans_a=int(trans_a),
+                          overwrite_c=1)
+
+
+def _grow(A: np.ndarray, cap: int) -> np.ndarray:
+    """Copy of the Fortran-ordered ``A`` with ``cap`` columns (the first ones kept)."""
+    out = np.empty((A.shape[0], cap), order="F")
+    out[:, :A.shape[1]] = A
+    return out

@@ -55,17 +55,33 @@ __all__ = [
 BACKENDS = ("auto", "superlu", "cholmod")
 #: BLAS threads used inside factorisations and eigen solves (None: leave as is).
 BLAS_THREADS: int | None = 1
-#: Block width of the block Lanczos method of :func:`eigsh_lowest` (``method="block"``).
-#: Not the default: on the 49 140-DOF plate it needed 42 solves (14 blocks of 3) where
-#: ARPACK needs 34, and a block of k right-hand sides costs 0.3-0.8 of k single solves
-#: (SuperLU and the CHOLMOD wheel, measured, docs/guide/fe.md), so it was not faster.
-BLOCK_SIZE = 3
+#: Block width of the block Lanczos method of :func:`eigsh_lowest` (the default method).
+#: Measured on the 49 140-DOF plate (CHOLMOD, simplicial solves, iteration only, CPU,
+#: load 4-5): 10 modes, ARPACK 34 solves 0.99-1.12 s; blocks of 1, 2, 3, 4: 27, 36, 45,
+#: 52 vectors, 0.76, 0.75, 0.71-0.82, 0.77-0.85 s; 4 modes: ARPACK 21 solves 0.74 s,
+#: blocks of 1, 2: 15, 22 vectors, 0.49, 0.50 s. A block of 2 finds both copies of a
+#: double eigenvalue (symmetric structures) without relying on round-off, at the cost of
+#: one with single vectors. (With the supernodal solves of the CHOLMOD wheel, before
+#: :data:`CHOLMOD_SIMPLICIAL`, a block of k right-hand sides cost 0.7-0.9 of k single
+#: solves and the block method lost to ARPACK.)
+BLOCK_SIZE = 2
 #: Default relative eigenvalue tolerance of :func:`eigsh_lowest` (see its docstring).
 #: 0 is ARPACK's machine precision. A looser 1e-10 (28 instead of 34-41 solves on the
 #: 90 x 90 plate) converged before every copy of a repeated eigenvalue had emerged (the
 #: 7-fold 17.709 Hz mode of NAFEMS FV2 came out 6-fold): Lanczos from one start vector
 #: finds the copies of a repeated eigenvalue only through round-off, so it must run on.
+#: (The block method of the default finds up to :data:`BLOCK_SIZE` copies without
+#: round-off; the Sturm check covers the others.)
 DEFAULT_TOL = 0.0
+#: Solve with CHOLMOD's simplicial form of the factor: after the supernodal
+#: factorisation, the factor is converted in place to simplicial LL' (the same entries,
+#: copied; ~20 ms on the 49 140-DOF plate). The CHOLMOD wheel links the reference BLAS,
+#: whose supernodal triangular sweeps are slow: on that plate a simplicial solve took
+#: 21 ms of CPU against 27-30 ms for one right-hand side, and 9-13 ms against 20-25 ms
+#: per right-hand side for 2-50 of them (CHOLMOD's simplicial kernels take up to 4 at a
+#: time). Residuals equal to round-off (1e-14 relative difference of the solutions).
+#: While converting, CHOLMOD holds both forms of the factor (a transient peak).
+CHOLMOD_SIMPLICIAL = True
 
 _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
 _ORDER_CACHE_SIZE = 8
@@ -380,24 +396,25 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     size = np.bincount(group)[group]
     pos = np.arange(n) - first
     kinds, kind = np.unique(size * 64 + np.minimum(pos, 63), return_inverse=True)
-    kind = kind.ravel()
     nk = len(kinds)
     if nk < 2:
         return A
-    kr = kind[A.indices]
-    kc = np.repeat(kind, length)
-    nz = A.data != 0
-    link = np.bincount(kr[nz] * nk + kc[nz], minlength=nk * nk).reshape(nk, nk) > 0
+    kind = kind.ravel().astype(np.int32)
+    # kind pairs linked by a nonzero entry (rows and columns of the nonzeros only)
+    nz = np.flatnonzero(A.data)
+    col = np.repeat(kind, length)
+    link = np.bincount(kind[A.indices[nz]].astype(np.int64) * nk + col[nz],
+                       minlength=nk * nk).reshape(nk, nk) > 0
     _, comp = sp.csgraph.connected_components(sp.csr_matrix(link | link.T),
                                               directed=False)
-    keep = comp[kr] == comp[kc]
+    ck = comp[kind]
+    keep = ck[A.indices] == np.repeat(ck, length)
     if np.all(keep):
         return A
-    count = np.zeros(n, dtype=np.int64)
-    count[nzc] = np.add.reduceat(keep.astype(np.int64), A.indptr[:-1][nzc])
-    indptr = np.zeros(n + 1, dtype=np.int64)
-    np.cumsum(count, out=indptr[1:])
-    out = sp.csc_matrix((A.data[keep], A.indices[keep], indptr.astype(A.indptr.dtype)),
+    take = np.flatnonzero(keep)
+    # entries kept before each column's start: the new column pointers
+    indptr = np.searchsorted(take, A.indptr)
+    out = sp.csc_matrix((A.data[take], A.indices[take], indptr.astype(A.indptr.dtype)),
                         shape=A.shape)
     out.has_sorted_indices = True
     return out
@@ -494,6 +511,8 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
                         f"matrix of size {A.shape[0]} is not positive definite "
                         "(CHOLMOD): " + singular) from err
             else:
+                if CHOLMOD_SIMPLICIAL:
+                    _to_simplicial(f)
                 # CHOLMOD may factorise a singular matrix with a round-off pivot; a solve
                 # round trip tells (then SuperLU decides, with its exact-zero pivots)
                 x0 = np.random.default_rng(1).standard_normal(A.shape[0])
@@ -516,6 +535,17 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
         except RuntimeError as err:
             raise ParameterError(singular) from err
     return Factorization("superlu", A.shape, solve, perm=perm, lu=lu)
+
+
+def _to_simplicial(f) -> None:
+    """Convert a CHOLMOD supernodal LL' factor to simplicial LL' in place (a copy of
+    the same entries, no arithmetic; see :data:`CHOLMOD_SIMPLICIAL`). A binding
+    without ``change_factor`` keeps the supernodal factor."""
+    solver = getattr(f, "_solver", None)
+    if solver is None or not hasattr(solver, "change_factor"):
+        return
+    if solver.is_super():
+        solver.change_factor(1, 0)
 
 
 @contextmanager
@@ -672,8 +702,9 @@ def eigsh_lowest(
 ) -> EigenSolution:
     """Lowest ``n`` eigenpairs of the generalised symmetric problem by shift-invert.
 
-    One factorisation of ``K - sigma M`` is made and passed to ARPACK's Lanczos
-    (``scipy.sparse.linalg.eigsh``) as ``OPinv``, with a deterministic start vector and
+    One factorisation of ``K - sigma M`` is made and used by a shift-invert Lanczos
+    (by default the block Lanczos of :mod:`mvtk.fe._block_eigen`, or ARPACK's
+    ``scipy.sparse.linalg.eigsh`` with ``OPinv``), with a deterministic start and
     BLAS threads limited to :data:`BLAS_THREADS`. For free-free structures pass a
     negative ``sigma`` (default: a small negative shift scaled to the problem, so
     rigid-body modes are found too).
@@ -696,9 +727,10 @@ def eigsh_lowest(
         Relative accuracy requested for the eigenvalues: ARPACK stops when every Ritz
         value ``theta`` of ``(K - sigma M)^-1 M`` has a residual below ``tol |theta|``,
         which bounds the relative error of ``omega2 - sigma`` by ``tol`` (in practice
-        the error is quadratic in the residual, far smaller). Default
-        :data:`DEFAULT_TOL` = 0, machine precision: a looser tolerance saves a few solves
-        but can stop before every copy of a repeated eigenvalue has emerged.
+        the error is quadratic in the residual, far smaller); the block method stops at
+        residuals below ``sqrt(tol)`` (see ``method``). Default :data:`DEFAULT_TOL` = 0,
+        machine precision: with ARPACK a looser tolerance saves a few solves but can stop
+        before every copy of a repeated eigenvalue has emerged.
     singular_shift : float or callable, optional
         Shift to use instead of the default one when K turns out singular (a caller that
         knows the scale of the first elastic mode, e.g. from a trial field, passes it),
@@ -706,7 +738,7 @@ def eigsh_lowest(
     v0 : ndarray, shape (n_dof,) or (n_dof, k), optional
         Warm start: eigenvectors of a nearby model (model updating, Monte Carlo,
         parameter studies). The Lanczos start vector is built from them (see
-        :func:`_start_vector`), which cuts the number of solves.
+        :func:`_start_vector` and :func:`_start_block`), which cuts the number of solves.
     backend : {"auto", "superlu", "cholmod"}
         See :func:`factorize`.
     method : {"auto", "arpack", "block"}
@@ -714,8 +746,13 @@ def eigsh_lowest(
         ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:data:`BLOCK_SIZE`
         vectors per solve, full M-orthogonalisation, no restart), accepted when every
         Ritz residual is below ``sqrt(tol)`` (1e-10 for ``tol=0``) relative to its Ritz
-        value. ``"auto"``: ARPACK, which measured faster (see :data:`BLOCK_SIZE`). Both
-        keep the Sturm check for missed copies of repeated eigenvalues.
+        value; the returned Rayleigh quotients are then as accurate as ARPACK's with
+        ``tol=0``, at the round-off floor of the factorisation (on the 49 140-DOF plate
+        both differ from each other by
+        5e-11-6e-10, as ARPACK's own results do between the two backends, 8e-11, and
+        between 4 and 10 modes requested, 3e-10).
+        ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
+        Both keep the Sturm check for missed copies of repeated eigenvalues.
 
     Returns
     -------
@@ -757,7 +794,7 @@ def eigsh_lowest(
             M = M.copy()
             M.eliminate_zeros()
         if method == "auto":
-            method = "arpack"
+            method = "block"
         used_method = method
         k = n
         if method == "block":
@@ -772,7 +809,7 @@ def eigsh_lowest(
                 with _blas_limits():
                     theta, v, _ = block_lanczos(
                         lu.solve, M, k, start, res_tol,
-                        max_basis=min(ndof, max(40 * start.shape[1], 4 * k + 40)))
+                        max_basis=min(ndof, max(60 * start.shape[1], 8 * k + 40)))
                 w = sigma + 1.0 / theta
             else:
                 try:
@@ -787,7 +824,7 @@ def eigsh_lowest(
                     ) from err
             order = np.argsort(w)
             w, v = w[order], v[:, order]
-            missing = _missed_copies(K, M, w[:n])
+            missing = _missed_copies(K, M, w[:n], sigma)
             n_fact += missing is not None
             if not missing:
                 break
@@ -829,19 +866,29 @@ def eigsh_lowest(
                          backend=used, method=used_method)
 
 
-def _clustered(w: np.ndarray) -> bool:
-    """True when two eigenvalues agree to 1e-6 (relative): a repeated eigenvalue."""
+def _cluster_scale(w: np.ndarray, sigma: float) -> np.ndarray:
+    """Distance of each eigenvalue from the shift (floored): closeness is judged relative
+    to it, as the shift-inverted operator sees the eigenvalues (``1 / (w - sigma)``), so
+    the round-off values of rigid-body modes near 0 below a negative shift cluster too."""
+    d = np.abs(w - sigma)
+    return np.maximum(d, d.max() * 1e-12)
+
+
+def _clustered(w: np.ndarray, sigma: float = 0.0) -> bool:
+    """True when two eigenvalues agree to 1e-6 relative to their distance from the shift
+    ``sigma``: a repeated eigenvalue."""
     if w.size < 2:
         return False
-    scale = np.maximum(np.abs(w[1:]), np.abs(w).max() * 1e-12)
-    return bool(np.any(np.diff(w) <= 1e-6 * scale))
+    return bool(np.any(np.diff(w) <= 1e-6 * _cluster_scale(w, sigma)[1:]))
 
 
-def _missed_copies(K, M, w: np.ndarray) -> int | None:
+def _missed_copies(K, M, w: np.ndarray, sigma: float = 0.0) -> int | None:
     """Eigenvalues of ``(K, M)`` below the highest cluster of ``w`` that Lanczos missed.
 
     Checked only when ``w`` holds a repeated eigenvalue (a symmetric structure, rigid
-    modes), the case in which single-vector Lanczos can return fewer copies than exist.
+    modes: see :func:`_clustered`), the case in which Lanczos can return fewer copies than
+    exist (single-vector Lanczos finds them only through round-off, a block of ``b``
+    vectors ``b`` of them).
     Sylvester's law of inertia: the number of negative pivots of the symmetric
     factorisation of ``K - tau M`` (SuperLU, diagonal pivots in a symmetric ordering)
     is the number of eigenvalues below ``tau``. ``tau`` is just below the highest
@@ -849,9 +896,9 @@ def _missed_copies(K, M, w: np.ndarray) -> int | None:
     missing). Returns None when not checked (no cluster, nothing below the top cluster,
     or ``K - tau M`` singular).
     """
-    if not _clustered(w):
+    if not _clustered(w, sigma):
         return None
-    scale = np.maximum(np.abs(w), np.abs(w).max() * 1e-12)
+    scale = _cluster_scale(w, sigma)
     top = w.size - 1
     while top > 0 and w[top] - w[top - 1] <= 1e-6 * scale[top]:
         top -= 1
@@ -884,7 +931,8 @@ class MemoryEstimate:
     solve : int
         Bytes the eigen step adds on top: SuperLU's storage
         (:data:`FACTOR_BYTES_PER_NNZ` per stored entry), two working copies of K
-        (CSC and permuted) and the Lanczos basis and returned vectors.
+        (CSC and permuted) and the Lanczos basis (with its M-image) and returned
+        vectors.
     total : int
         ``matrices + solve``.
     """
@@ -988,9 +1036,11 @@ def estimate_eigen_memory(
     nnz_factor = int(np.sum(s[L.row[off_l]] * s[L.col[off_l]])
                      + np.sum(s[U.row[off_u]] * s[U.col[off_u]])
                      + np.sum(s * s + s))
-    ncv = min(n_dof, max(2 * n_modes + 1, 20))
+    # the block Lanczos basis and its M-image (first allocation; it grows only when
+    # the convergence needs more)
+    basis = 2 * min(n_dof, max(4 * n_modes + 4 * BLOCK_SIZE, 32))
     matrices = 2 * (nnz_matrix * 12 + (n_dof + 1) * 4)
     solve = (int(FACTOR_BYTES_PER_NNZ * nnz_factor) + 2 * nnz_matrix * 12
-             + (ncv + 3 * n_modes + 6) * n_dof * 8)
+             + (basis + 3 * n_modes + 6) * n_dof * 8)
     return MemoryEstimate(n_dof=n_dof, nnz_matrix=nnz_matrix, nnz_factor=nnz_factor,
                           matrices=matrices, solve=solve, total=matrices + solve)
