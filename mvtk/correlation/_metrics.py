@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 import xarray as xr
 
+from .._mac import mac_columns
 from ..errors import DimensionError, ParameterError
 
 __all__ = [
@@ -102,14 +103,8 @@ def mac(a: Any, b: Any | None = None) -> xr.DataArray:
         the ``fn_hz`` of each set as coordinates when present.
     """
     A, B = _aligned(a, a if b is None else b)
-    x, y = A.values, B.values
-    num = np.abs(np.conj(x) @ y.T) ** 2
-    na = np.real(np.einsum("ij,ij->i", np.conj(x), x))
-    nb = np.real(np.einsum("ij,ij->i", np.conj(y), y))
-    den = np.outer(na, nb)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        val = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-    return xr.DataArray(np.clip(val, 0.0, 1.0), dims=("mode_a", "mode_b"),
+    val = mac_columns(A.values.T, B.values.T)
+    return xr.DataArray(val, dims=("mode_a", "mode_b"),
                         coords={**_mode_coords(A, "a"), **_mode_coords(B, "b")},
                         attrs={"metric": "MAC"})
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._mac import mac_columns
 from ..errors import DimensionError
 
 __all__ = ["mac", "mpc", "mpd", "cmif"]
@@ -30,11 +31,7 @@ def mac(a, b=None) -> np.ndarray:
         raise DimensionError(
             f"mac: the shapes have {a.shape[-1]} and {b.shape[-1]} DOFs; expected the same dofs"
         )
-    num = np.abs(np.conj(a) @ b.T) ** 2
-    den = np.real(np.einsum("ij,ij->i", np.conj(a), a))[:, None] * \
-        np.real(np.einsum("ij,ij->i", np.conj(b), b))[None, :]
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
+    return mac_columns(a.T, b.T)
 
 
 def mpc(shapes) -> np.ndarray:

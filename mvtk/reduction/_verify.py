@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._mac import mac_columns
 from ..errors import DimensionError, ParameterError
 from ..fe import FEModel, eigsh_lowest, factorize
 from ._craig_bampton import SuperElement, reduced_modes, solve_columns
@@ -44,7 +45,8 @@ def mac(phi_a: np.ndarray, phi_b: np.ndarray, weight=None) -> np.ndarray:
 
     Returns
     -------
-    ndarray, shape (ka, kb), values in [0, 1]
+    ndarray, shape (ka, kb), values in [0, 1] (0 for an all-zero shape; see
+        :func:`mvtk._mac.mac_columns`)
     """
     a = np.asarray(phi_a)
     b = np.asarray(phi_b)
@@ -55,13 +57,7 @@ def mac(phi_a: np.ndarray, phi_b: np.ndarray, weight=None) -> np.ndarray:
             f"mode sets must have the same number of rows (DOFs), got {a.shape[0]} "
             f"and {b.shape[0]}"
         )
-    wb = b if weight is None else weight @ b
-    wa = a if weight is None else weight @ a
-    num = np.abs(np.conj(a).T @ wb) ** 2
-    den = np.real(np.einsum("ij,ij->j", np.conj(a), wa))[:, None] * np.real(
-        np.einsum("ij,ij->j", np.conj(b), wb)
-    )[None, :]
-    return num / den
+    return mac_columns(a, b, weight)
 
 
 @dataclass(frozen=True)

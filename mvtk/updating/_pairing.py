@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._mac import mac_columns
 from ..errors import DimensionError, ParameterError
 from ..fe._model import DOF_NAMES, FEModel
 from ._targets import FrequencyTarget
@@ -37,11 +38,7 @@ def mac(phi_a: np.ndarray, phi_b: np.ndarray) -> np.ndarray:
         raise DimensionError(
             f"MAC needs shapes over the same sensors, got {a.shape} and {b.shape}"
         )
-    num = (a.T @ b) ** 2
-    den = np.outer(np.einsum("ij,ij->j", a, a), np.einsum("ij,ij->j", b, b))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out = np.where(den > 0, num / np.where(den > 0, den, 1.0), 0.0)
-    return np.clip(out, 0.0, 1.0)
+    return mac_columns(a, b)
 
 
 def classify_modes(model: FEModel, vectors: np.ndarray) -> list[str]:

@@ -153,3 +153,21 @@ def test_agrees_with_sdypy_and_sdynpy():
     # SDynPy's msf scales the first set onto the second: msf(shapes, ref) = ref^H s / ref^H ref
     np.testing.assert_allclose(sdc.msf(fe.values.T, test.values.T).real,
                                co.msf(fe, test).values, rtol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [1e-160, 1.0, 1e160])
+def test_every_mac_is_one_implementation_and_scale_free(scale):
+    """mvtk.modal, mvtk.correlation, mvtk.updating and mvtk.reduction share one MAC; a
+    shape of magnitude 1e-160 (its squares underflow) gives the same MAC as at 1."""
+    import mvtk.correlation as corr
+    import mvtk.modal as modal
+    from mvtk.reduction._verify import mac as mac_reduction
+    from mvtk.updating import mac as mac_updating
+
+    rng = np.random.default_rng(3)
+    a, b = rng.standard_normal((6, 2)), rng.standard_normal((6, 3))
+    ref = (a.T @ b) ** 2 / np.outer((a * a).sum(0), (b * b).sum(0))   # closed form
+    for got in (mac_updating(scale * a, b), mac_reduction(scale * a, b),
+                modal.mac((scale * a).T, b.T), corr.mac((scale * a).T, b.T).values):
+        np.testing.assert_allclose(got, ref, rtol=1e-12)
+    np.testing.assert_allclose(np.diag(mac_updating(scale * a, scale * a)), 1.0, rtol=1e-12)

@@ -142,7 +142,10 @@ def test_ritz_values_bound_the_eigenvalues_and_are_exact_on_the_modes(beam):
     assert basis.extend(eig0.vectors) == 0          # already in the span: nothing added
     np.testing.assert_allclose(basis.M0r, np.eye(n), atol=1e-12)
     w, _ = basis.eig(np.array([0.0]), n)
-    np.testing.assert_allclose(w, eig0.omega2, rtol=1e-10)
+    # the solver's eigenvalues vs the Rayleigh quotients of its vectors: equal up to the
+    # factorisation's round-off on this clamped strip's ill-conditioned mode 1 (2.3e-10
+    # measured with CHOLMOD, below 1e-10 with SuperLU)
+    np.testing.assert_allclose(w, eig0.omega2, rtol=1e-9)
     # at another clamp value: upper bounds, closer with the static derivatives added
     for kr in (200.0, 20000.0):
         # LAPACK on M x = mu K x, mu = 1 / omega^2 (K is well conditioned, M is not:
