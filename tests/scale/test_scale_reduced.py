@@ -74,8 +74,11 @@ def test_a_sample_far_from_the_centre_falls_back_to_the_full_solve():
     values[5, 0] = 0.4 * 200e9
     ds = parameter_study(STRIP, dict(zip(PATHS, values.T)), n_modes=3, method="reduced")
     assert ds["path"].values[5] == "full"
+    # two full solves of slightly different matrices (the study's K without its
+    # round-off entries): equal to the factorisation's round-off on the strip's mode 1
+    # (1.9e-10 with SuperLU and the block Lanczos)
     np.testing.assert_allclose(ds["fn_hz"].values[5], _full(STRIP, values[5], 3),
-                               rtol=1e-10)
+                               rtol=1e-9)
     assert ds.attrs["n_full"] >= 1
     # a tolerance no sample meets sends every sample to a correction or a full solve
     tight = parameter_study(STRIP, dict(zip(PATHS, values.T)), n_modes=3,

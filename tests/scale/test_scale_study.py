@@ -40,7 +40,9 @@ def test_parameter_study_in_process_equals_direct_modal_analysis():
     for i in range(2):
         vals = {p: samples[p][i] for p in samples}
         direct = mvtk.fe.modal_analysis(mvtk.fe.build_model(with_values(STRIP, vals)), 3)
-        np.testing.assert_allclose(ds["fn_hz"].values[i], direct.fn_hz, rtol=1e-10)
+        # K without its round-off entries vs modal_analysis' K: equal to the
+        # factorisation's round-off on mode 1 (1.1e-10 with SuperLU, block Lanczos)
+        np.testing.assert_allclose(ds["fn_hz"].values[i], direct.fn_hz, rtol=1e-9)
     assert ds.attrs["scheduler"] == "in-process" and ds.attrs["n_failed"] == 0
     assert STRIP["materials"]["al"]["E"] == 70e9  # the description is not modified
 
