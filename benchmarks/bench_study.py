@@ -87,9 +87,10 @@ def main() -> None:
     print(f"smart-beam study, cold cache: median {cold:7.2f} s wall, {cold_cpu:.2f} s CPU "
           f"(runs: {', '.join(f'{w:.1f} s / {c:.1f} s' for w, c in zip(walls, cpus))}; "
           "target 10 s wall)")
-    print("  stages of the first run, wall / CPU (ingest and uncertainty in worker "
-          "processes): " + ", ".join(f"{k} {v:.1f} / {res.cpu_s.get(k, float('nan')):.1f} s"
-                                     for k, v in res.timings_s.items()))
+    print("  stages of the first run, wall / CPU (ingest, fe, correlation and uncertainty "
+          "in worker processes): "
+          + ", ".join(f"{k} {v:.1f} / {res.cpu_s.get(k, float('nan')):.1f} s"
+                      for k, v in res.timings_s.items()))
     print(f"smart-beam study, warm cache: {warm:7.2f} s  (ratio warm/cold {warm / cold:.3f})")
     serial = {}
     if args.serial:
