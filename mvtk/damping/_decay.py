@@ -91,6 +91,20 @@ class DecayResult:
 _MAX_REL_SE = 0.1
 # ... and the envelope falls by at least this factor across the fitted span
 _MIN_DROP = 2.0
+# ... over at least this many damped periods (fewer: the fit sees a dip, not a decay)
+_MIN_CYCLES = 3.0
+# ... with zeta of the high- and low-amplitude halves within this factor of each other
+# (a single exponential; beyond it: beating of two modes, a noise floor, amplitude-
+# dependent damping, or no decay at all)
+_MAX_EARLY_LATE = 2.0
+# ... with the straight line explaining at least this share of the (weighted) variation
+# of ln(amplitude): clean decays from 40 down to 10 dB SNR and the real LVM hammer decays
+# give 0.93-0.9999, two beating modes of amplitudes 1 : 0.8 give 0.45-0.53
+_MIN_R2 = 0.8
+# ... and the envelope never comes back above this fraction of the fit's first value
+# after the fit (a free decay does not grow again: a second impact, continuous
+# excitation or ambient noise does)
+_MAX_REBOUND = 0.5
 
 
 def _prepare(x, channel, fn_hz, band_hz, order, detrend, t_start_s, t_end_s):
@@ -232,22 +246,51 @@ def _fn_guess(sig, fs):
     return float(f[int(np.argmax(spec))])
 
 
+def _r2(y, res, w):
+    """Weighted coefficient of determination of a straight-line fit with residuals ``res``."""
+    ym = np.sum(w * y) / np.sum(w)
+    ss = np.sum(w * (y - ym) ** 2)
+    return float(1.0 - np.sum(w * res**2) / ss) if ss > 0 else np.nan
+
+
 class _ChannelFailure(Exception):
     """One channel could not be fitted; the message says why."""
 
 
-def _verdict(sigma, zeta, zse, span_s):
-    """Reliability of a decay fit: (reliable, reason)."""
+def _verdict(sigma, zeta, zse, span_s, *, cycles=np.inf, early=np.nan, late=np.nan,
+             rebound=None, r2=np.nan):
+    """Reliability of a decay fit: (reliable, reason).
+
+    ``cycles``: damped periods spanned by the fit; ``early``/``late``: zeta of the
+    high- and low-amplitude halves; ``rebound``: ``(ratio, t_s)``, the largest envelope
+    after the fit relative to its first value and when; ``r2``: weighted coefficient of
+    determination of the straight line through ln(amplitude). Every failed criterion is
+    named in the reason (joined by "; ").
+    """
     if not sigma > 0:
         return False, f"the envelope does not decay (sigma = {sigma:.3g} 1/s): not a free decay"
+    why = []
     drop = np.exp(sigma * span_s)
     if drop < _MIN_DROP:
-        return False, (f"the envelope falls only {drop:.2f} x over the fitted "
-                       f"{span_s:.3g} s (< {_MIN_DROP:g} x): noise or a forced response?")
+        why.append(f"the envelope falls only {drop:.2f} x over the fitted "
+                   f"{span_s:.3g} s (< {_MIN_DROP:g} x): noise or a forced response?")
+    if rebound is not None and rebound[0] > _MAX_REBOUND:
+        why.append(f"envelope rises again ({rebound[0]:.2f} x the fit's start at "
+                   f"{rebound[1]:.3g} s): not one free decay")
+    if cycles < _MIN_CYCLES:
+        why.append(f"only {cycles:.2g} periods fitted (< {_MIN_CYCLES:g})")
+    if np.isfinite(early) and np.isfinite(late):
+        lo, hi = min(early, late), max(early, late)
+        if not lo > 0 or hi > _MAX_EARLY_LATE * lo:
+            why.append(f"zeta early {early:.3g} vs late {late:.3g} (> {_MAX_EARLY_LATE:g} x): "
+                       "not one exponential")
+    if r2 < _MIN_R2:
+        why.append(f"the exponential explains {max(r2, 0.0):.0%} of ln(amplitude) "
+                   f"(R^2 < {_MIN_R2:g}): beating or no decay")
     if not zse <= _MAX_REL_SE * zeta:
-        return False, (f"zeta uncertain: standard error {zse / zeta:.0%} of the value "
-                       f"(> {_MAX_REL_SE:.0%})")
-    return True, ""
+        why.append(f"zeta uncertain: standard error {zse / zeta:.0%} of the value "
+                   f"(> {_MAX_REL_SE:.0%})")
+    return not why, "; ".join(why)
 
 
 def _run(names, data, fs, fn_hz, band, order, fit_one, t0, estimator):
@@ -364,9 +407,14 @@ def log_decrement(
     -------
     DecayResult
         One row per channel. A channel that cannot be fitted gets NaN and its reason
-        (the others are still fitted); a fit that is not a clear exponential decay
-        (no decay, less than a factor 2 of amplitude drop, or a zeta standard error
-        above 10 %) is marked ``reliable=False`` with the reason.
+        (the others are still fitted); a fit that is not one clear exponential decay
+        is marked ``reliable=False`` with every failed criterion in ``reason``: no
+        decay; less than a factor 2 of amplitude drop; the envelope growing back above
+        half the fit's first value after the fit (a second impact, continuous or
+        ambient excitation); fewer than 3 periods fitted; zeta of the high- and
+        low-amplitude halves (``zeta_early``, ``zeta_late``) more than 2x apart; a
+        straight line explaining less than 80 % of ln(amplitude) (R^2 < 0.8, beating
+        modes); a zeta standard error above 10 %.
 
     Raises
     ------
@@ -394,9 +442,12 @@ def log_decrement(
         if amp.size:
             i0 = int(np.argmax(amp))
             t, amp = t[i0 + int(skip_cycles):], amp[i0 + int(skip_cycles):]
+        rebound = None
         if amp.size:
             below = np.flatnonzero(amp < threshold * amp[0])
             if below.size:
+                after = int(np.argmax(amp[below[0]:])) + below[0]
+                rebound = (amp[after] / amp[0], t[after] + t0)
                 t, amp = t[: below[0]], amp[: below[0]]
         if amp.size < 3:
             raise _ChannelFailure(
@@ -407,16 +458,18 @@ def log_decrement(
 
         def zeta_of(kk, tt, aa):
             st, sst, _, _ = _linfit(kk, tt)
-            sa, ssa, _, _ = _linfit(kk, np.log(aa), aa**2)
+            sa, ssa, _, res = _linfit(kk, np.log(aa), aa**2)
             sigma = -sa / st
             sigma_se = np.hypot(ssa / st, sa * sst / st**2)
             wd, wd_se = 2 * np.pi / st, 2 * np.pi * sst / st**2
-            return _zeta_from(sigma, sigma_se, wd, wd_se), sigma, wd
+            return _zeta_from(sigma, sigma_se, wd, wd_se), sigma, wd, _r2(np.log(aa), res,
+                                                                         aa**2)
 
-        (fn, z, fn_se, zse), sigma, wd = zeta_of(k, t, amp)
+        (fn, z, fn_se, zse), sigma, wd, r2 = zeta_of(k, t, amp)
         ze, zl = _halves(k, t, amp, lambda kk, tt, aa: zeta_of(kk, tt, aa)[0][1]) \
             if amp.size >= 6 else (np.nan, np.nan)
-        ok, why = _verdict(sigma, z, zse, t[-1] - t[0])
+        ok, why = _verdict(sigma, z, zse, t[-1] - t[0], cycles=amp.size - 1.0, early=ze,
+                           late=zl, rebound=rebound, r2=r2)
         return dict(fn=fn, z=z, fn_se=fn_se, zse=zse, fd=wd / (2 * np.pi), t0=t[0],
                     t1=t[-1], n=amp.size, ze=ze, zl=zl, ok=ok, why=why)
 
@@ -478,6 +531,7 @@ def envelope_fit(
                                          t_start_s, t_end_s)
 
     def fit_one(name, sig, guess, b):
+        rebound = None
         t, env, phase = _envelope(sig, fs, guess, b, method, trim)
         if env.size < 8:
             raise _ChannelFailure(
@@ -491,6 +545,9 @@ def envelope_fit(
                 phase = phase[start:]
             below = np.flatnonzero(env < threshold * env[0])
             stop = below[0] if below.size else env.size
+            if stop < env.size:
+                after = int(np.argmax(env[stop:])) + stop
+                rebound = (env[after] / env[0], t[after] + t0)
             t, env = t[:stop], env[:stop]
             if phase is not None:
                 phase = phase[:stop]
@@ -501,18 +558,14 @@ def envelope_fit(
             )
         r = _fit_envelope(t, env, phase)
         cycles = (t[-1] - t[0]) * r["wd"] / (2 * np.pi)
-        if cycles < 3:
-            warnings.warn(
-                f"envelope_fit: channel {name!r} fit spans only {cycles:.2g} cycles",
-                ResolutionWarning, stacklevel=4,
-            )
         if env.size >= 16:
             h = env.size // 2
             ze = _fit_envelope(t[:h], env[:h], None if phase is None else phase[:h])["z"]
             zl = _fit_envelope(t[h:], env[h:], None if phase is None else phase[h:])["z"]
         else:
             ze = zl = np.nan
-        ok, why = _verdict(r["sigma"], r["z"], r["zse"], t[-1] - t[0])
+        ok, why = _verdict(r["sigma"], r["z"], r["zse"], t[-1] - t[0], cycles=cycles,
+                           early=ze, late=zl, rebound=rebound, r2=r["r2"])
         return dict(fn=r["fn"], z=r["z"], fn_se=r["fn_se"], zse=r["zse"],
                     fd=r["wd"] / (2 * np.pi), t0=t[0], t1=t[-1], n=env.size, ze=ze, zl=zl,
                     ok=ok, why=why)
@@ -543,7 +596,7 @@ def _envelope(sig, fs, guess, band, method, trim):
 
 
 def _fit_envelope(t, env, phase):
-    slope, se, _, _ = _linfit(t, np.log(env), env**2)
+    slope, se, _, res = _linfit(t, np.log(env), env**2)
     sigma, sigma_se = -slope, se
     if phase is not None:
         wd, wd_se, _, _ = _linfit(t, phase, env**2)
@@ -553,7 +606,8 @@ def _fit_envelope(t, env, phase):
         half, half_se, _, _ = _linfit(k, t)
         wd, wd_se = np.pi / half, np.pi * half_se / half**2
     fn, z, fn_se, zse = _zeta_from(sigma, sigma_se, wd, wd_se)
-    return dict(fn=fn, z=z, fn_se=fn_se, zse=zse, sigma=sigma, wd=wd)
+    return dict(fn=fn, z=z, fn_se=fn_se, zse=zse, sigma=sigma, wd=wd,
+                r2=_r2(np.log(env), res, env**2))
 
 
 def damping_vs_amplitude(
