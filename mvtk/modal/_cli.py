@@ -163,7 +163,11 @@ def run(args: argparse.Namespace) -> int:
         return 0
     sys.stdout.write(f"{modes.method}: {modes.n_modes} mode(s) in "
                      f"{modes.diagram.band_hz[0]:g}..{modes.diagram.band_hz[1]:g} Hz\n")
-    sys.stdout.write(table.to_string(index=False) + "\n")
+    if modes.n_modes:
+        sys.stdout.write(table.to_string(index=False) + "\n")
+    else:
+        sys.stdout.write("no pole is stable over enough model orders in this band (more "
+                         "data, another band or --orders)\n")
     if modes.correlation is not None:
         sys.stdout.write(f"measured vs synthesised FRF correlation: "
                          f"{modes.correlation.attrs['overall']:.4f}\n")

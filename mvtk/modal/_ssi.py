@@ -32,6 +32,63 @@ def _correlations(y, yr, nlag):
     return np.moveaxis(r, -1, 0) / (n - np.arange(nlag))[:, None, None]
 
 
+# largest block Toeplitz matrix (rows) an automatic n_lags may ask for (SVD ~ 2 s)
+_MAX_TOEPLITZ_ROWS = 2000
+
+
+def _decimate(y, fs, fmax):
+    """``y`` decimated to the lowest rate with ``fmax`` below 0.4 x the new rate."""
+    import scipy.signal
+
+    q_total = int(np.floor(0.4 * fs / fmax))
+    while q_total > 1:
+        q = min(q_total, 10)
+        y = scipy.signal.decimate(y, q, axis=1, zero_phase=True)
+        fs /= q
+        q_total = int(np.floor(0.4 * fs / fmax))
+    return y, fs
+
+
+def _time_history_like(th, y, fs):
+    """A time history with the coordinates of ``th`` and samples ``y`` at rate ``fs``."""
+    import xarray as xr
+
+    coords = {k: v for k, v in th.coords.items() if "time" not in v.dims}
+    coords["time"] = float(th["time"].values[0]) + np.arange(y.shape[1]) / fs
+    return xr.DataArray(y, dims=("channel", "time"), coords=coords, attrs=th.attrs,
+                        name=th.name)
+
+
+def _warn_power_below(y, lo, hi, i, fs):
+    """ResolutionWarning when the record's largest line or > 25 % of its power lies below
+    the resolved band."""
+    import warnings
+
+    import scipy.signal
+
+    from ..errors import ResolutionWarning
+
+    if not lo > 0:
+        return
+    # segments of >= 1/8 of the record and lines <= lo / 4 apart: the power below lo
+    # (a segment shorter than a period loses it to the segment's mean) is seen
+    nper = min(y.shape[1], 2 ** int(np.ceil(np.log2(max(4 * fs / lo, y.shape[1] / 8)))))
+    f, pxx = scipy.signal.welch(y, fs, nperseg=nper, axis=1)
+    power = pxx.sum(axis=0)
+    total = power[f <= hi].sum()
+    below = power[f < lo].sum()
+    in_band = f <= hi
+    if total > 0 and (below > 0.25 * total or f[in_band][np.argmax(power[in_band])] < lo):
+        peak = f[f < lo][int(np.argmax(power[f < lo]))]
+        warnings.warn(
+            f"ssi_cov: {below / total:.0%} of the record's power up to {hi:g} Hz lies below "
+            f"{lo:.4g} Hz, the lowest frequency {i} block rows resolve at {fs:g} Hz "
+            f"(largest peak there: {peak:.4g} Hz); to identify it give fmax (the record "
+            "is decimated) or fmin (n_lags is raised)",
+            ResolutionWarning, stacklevel=3,
+        )
+
+
 def ssi_cov(
     x,
     fmin: float | None = None,
@@ -57,13 +114,24 @@ def ssi_cov(
     x : xarray.DataArray or Dataset
         Time history ``("channel", "time")`` of the responses (ambient/operational).
     fmin, fmax : float, optional
-        Band in Hz for the physical poles (default 0..fs/2).
+        Band in Hz for the physical poles (default 0..fs/2). With ``fmax`` below
+        ``fs / 8`` the record is first decimated (zero-phase order-8 Chebyshev
+        anti-aliasing filters, :func:`scipy.signal.decimate`, in stages of at most 10)
+        to the lowest rate keeping ``fmax`` below 0.4 x the new rate. The band's lower
+        end is raised to the lowest frequency the block rows resolve,
+        ``fs / (2 n_lags)`` (Rainieri & Fabbrocino 2014, ch. 4: ``i >= fs / (2 f_0)``
+        for the lowest frequency ``f_0`` of interest); with ``fmin`` given and
+        ``n_lags`` not, ``n_lags`` is raised to resolve ``fmin`` (up to 2000 rows of the
+        Toeplitz matrix). A record whose largest spectral line or more than 25 % of whose
+        power lies below the resolved band gives a
+        :class:`~mvtk.errors.ResolutionWarning` naming its largest peak there.
     orders : iterable of int
         State-space orders (even; each gives ``n/2`` conjugate pairs).
     reference : channel selection, optional
         Reference outputs for the correlations (default every channel).
     n_lags : int, optional
-        Block rows ``i`` (default ``max(ceil((max_order + 1) / n_ref), 20)``).
+        Block rows ``i`` (default ``max(ceil((max_order + 1) / n_ref), 20)``, raised to
+        ``ceil(fs / (2 fmin))`` when ``fmin`` is given).
     fs : float, optional
         Sampling rate in Hz (derived from ``time`` and checked if given).
 
@@ -78,6 +146,8 @@ def ssi_cov(
     ----------
     Peeters & De Roeck, "Reference-based stochastic subspace identification for
     output-only modal analysis", MSSP 13(6) 1999.
+    Rainieri & Fabbrocino, "Operational Modal Analysis of Civil Engineering
+    Structures", Springer 2014, ch. 4 (number of block rows).
     """
     from .. import signal
     from ._quality import cmif
@@ -93,6 +163,10 @@ def ssi_cov(
             f"ssi_cov: channel {th['channel'].values[bad]!s} holds NaN/inf samples"
         )
     y = y - y.mean(axis=1, keepdims=True)
+    fs_in = fs
+    if fmax is not None and 0 < float(fmax) < fs / 8:
+        y, fs = _decimate(y, fs, float(fmax))
+        th = _time_history_like(th, y, fs)
     if reference is None:
         ref_idx = np.arange(y.shape[0])
     else:
@@ -103,13 +177,20 @@ def ssi_cov(
     nl, nr = y.shape[0], yr.shape[0]
     pmax = int(orders.max())
     i = int(n_lags) if n_lags is not None else max(int(np.ceil((pmax + 1) / nr)), 20)
+    if n_lags is None and fmin is not None and float(fmin) > 0:
+        i = max(i, min(int(np.ceil(fs / (2 * float(fmin)))), _MAX_TOEPLITZ_ROWS // nl))
     if i * nr < pmax or i * nl < pmax:
         raise ParameterError(
             f"ssi_cov: n_lags={i} block rows give a Toeplitz matrix of rank <= "
             f"{min(i * nr, i * nl)}; expected at least the highest order {pmax}"
         )
     if 2 * i + 1 >= y.shape[1] // 4:
-        raise ParameterError(f"ssi_cov: {y.shape[1]} samples are too few for {i} block rows")
+        raise ParameterError(
+            f"ssi_cov: {y.shape[1]} samples"
+            + (f" (after decimation from {fs_in:g} to {fs:g} Hz)" if fs != fs_in else "")
+            + f" are too few for {i} block rows (need > {4 * (2 * i + 2)}): a longer "
+            "record, fewer model orders, or a smaller n_lags"
+        )
     R = _correlations(y, yr, 2 * i + 1)                     # (2i+1, nl, nr)
     a = np.arange(i)
     k = i + a[:, None] - a[None, :]                          # lag index R_{i+a-b}
@@ -120,6 +201,14 @@ def ssi_cov(
     if not (0 <= lo < hi <= fs / 2):
         raise ParameterError(f"ssi_cov: the band must satisfy 0 <= fmin < fmax <= fs/2 = "
                              f"{fs / 2:g} Hz; got {lo!r}..{hi!r}")
+    floor = fs / (2 * i)
+    if floor >= hi:
+        raise ParameterError(
+            f"ssi_cov: {i} block rows at {fs:g} Hz resolve only frequencies above "
+            f"{floor:.4g} Hz, above the band's end {hi:g} Hz: raise n_lags to at least "
+            f"{int(np.ceil(fs / (2 * max(lo, hi / 10))))} or give fmax (decimation)"
+        )
+    lo = max(lo, floor)
     per_order = []
     for n in orders:
         O = U[:, :n] * np.sqrt(S[:n])[None, :]
@@ -136,6 +225,7 @@ def ssi_cov(
     G = signal.csd(th, fs=fs, nperseg=int(min(nper, y.shape[1])))
     f = G["frequency"].values
     band = (f >= lo) & (f <= hi)
+    _warn_power_below(y, lo, hi, i, fs)
     ind = cmif(G.values[:, :, band])
     return poles_to_diagram("SSI-cov", per_order, (lo, hi), f[band], ind, crit)
 
@@ -188,8 +278,9 @@ def identify_output_only(
     labels = dof_labels(nodes, dirs, names)
     shp = shapes_array(cplx, fn, zeta, labels, nodes, dirs, "unit_max", "SSI-cov")
     rshp = shapes_array(real, fn, zeta, labels, nodes, dirs, "unit_max", "SSI-cov")
-    mpc_v = mpc(cplx) if len(names) > 1 else np.ones(nm)
-    mpd_v = mpd(cplx) if len(names) > 1 else np.zeros(nm)
+    # one channel: the shape is a single number; MPC and MPD say nothing (NaN)
+    mpc_v = mpc(cplx) if len(names) > 1 else np.full(nm, np.nan)
+    mpd_v = mpd(cplx) if len(names) > 1 else np.full(nm, np.nan)
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
                                      diagram.band_hz, stab.zeta_max)
     return IdentifiedModes(
