@@ -23,7 +23,7 @@ def _init(args: argparse.Namespace) -> int:
               f"check it with `mvtk modes {res.structure} -n 6`")
     for t in res.tests:
         what = t["kind"] if t["kind"] != "skipped" else f"skipped: {t['why']}"
-        print(f"  {t['file']}: {what}")
+        print(f"  {t['file']}: {what}" + (f" ({t['note']})" if t.get("note") else ""))
     print(f"next: {res.next_command}")
     return 0
 

@@ -95,14 +95,41 @@ def _inline_table(options: dict) -> str:
 
 def _classify(path: Path, options: dict | None = None) -> dict:
     """What test a file holds: an impact test, a free decay, or a multi-point FRF set."""
-    import mvtk.damping
-    import mvtk.io
-    import mvtk.signal
-
     try:
-        ds = mvtk.io.read(path, **(options or {}))
+        ds, used, note = _read_with_options(path, options)
     except MvtkError as err:
         return {"file": path, "kind": "skipped", "why": f"not readable: {err}"}
+    out = _classify_dataset(path, ds)
+    out["read_options"] = used
+    if note:
+        out["note"] = note
+    return out
+
+
+def _read_with_options(path: Path, options: dict | None):
+    """``(dataset, options used or None, note)``: the reader options given to ``mvtk
+    init`` are used for the files that take them. A file that refuses them but reads
+    without them (it states its own units, sampling rate, ...) is read without them,
+    and the note says so; a file that reads neither way raises the first error."""
+    import mvtk.io
+
+    if not options:
+        return mvtk.io.read(path), None, ""
+    try:
+        return mvtk.io.read(path, **options), options, ""
+    except MvtkError as err:
+        try:
+            ds = mvtk.io.read(path)
+        except MvtkError:
+            raise err from None
+        return ds, None, f"read without the reader options, which it refuses ({err})"
+
+
+def _classify_dataset(path: Path, ds) -> dict:
+    """What test a dataset read from ``path`` holds (see :func:`_classify`)."""
+    import mvtk.damping
+    import mvtk.signal
+
     if "frf" in ds and "time_history" not in ds:
         frf = ds["frf"]
         if frf.sizes.get("response", 1) > 1:
@@ -194,8 +221,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     overwrite : bool
     read_options : dict, optional
         Reader options (:func:`mvtk.io.read` keywords, e.g. ``units``, ``quantity``,
-        ``fs``) for files that do not state them; used to read every measurement file
-        and written as ``read_options`` into each test section.
+        ``fs``) for files that do not state them. Every file is read with them; a file
+        that refuses them but reads without them (it states its own) is read without
+        them (its ``tests`` entry has a ``note``). They are written as ``read_options``
+        into the sections of the files that took them.
     geometry : path, optional
         Test geometry of a multi-point test (UFF 15/2411, or a CSV/TOML table of node,
         x, y, z in m), written as ``[modal] geometry``; without it the line is left
@@ -241,8 +270,15 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
 
     tests = [_classify(Path(m), read_options) for m in measurements]
-    opts_line = ([f"read_options = {_inline_table(read_options)}   # given to mvtk init"]
-                 if read_options else [])
+
+    def opts_line(*ts) -> list[str]:
+        used = [t.get("read_options") for t in ts]
+        if not any(used):
+            return []
+        line = f"read_options = {_inline_table(read_options)}   # given to mvtk init"
+        if all(used):
+            return [line]
+        return [f"# {line} (EDIT: not every set takes them)"]
     impact = next((t for t in tests if t["kind"] == "impact"), None)
     decay = next((t for t in tests if t["kind"] == "decay"), None)
     modal = next((t for t in tests if t["kind"] == "modal"), None)
@@ -287,7 +323,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f'reference = "{impact["reference"]}"',
             f'response = "{impact["response"]}"',
             f"record_s = {impact['record_s']:.6g}   # one record per hit (from the data)",
-            *opts_line,
+            *opts_line(impact),
             "",
         ]
     if decay:
@@ -295,7 +331,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             "[measurements.decay]    # free decay (no force channel)",
             f'file = "{_rel(decay["file"], folder)}"',
             f'channel = "{decay["channel"]}"',
-            *opts_line,
+            *opts_line(decay),
             "",
         ]
     fn = (impact or {}).get("fn_hz") or []
@@ -329,7 +365,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f'file = "{_rel(modal["file"], folder)}"',
             f"fmin_hz = {modal['fmin']:.6g}",
             f"fmax_hz = {modal['fmax']:.6g}",
-            *opts_line,
+            *opts_line(modal),
 *geometry_line(
                 "# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m) unless the file "
                 "has UFF 15 nodes"),
@@ -349,7 +385,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"fmax_hz = {hi:.6g}   # EDIT: the band of your modes",
 *geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
                            "needed to correlate with the FE model"),
-            *opts_line,
+            *opts_line(*roving),
             "",
         ]
     study_path.write_text("\n".join(lines), encoding="utf-8")

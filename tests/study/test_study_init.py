@@ -243,3 +243,25 @@ def test_study_read_options_are_validated(tmp_path):
     with pytest.raises(ConfigError, match=r"measurements\.decay\.read_options: expected a "
                        r"table"):
         load_study(tmp_path / "study.toml")
+
+
+def test_init_reader_options_go_to_the_files_that_take_them(tmp_path, capsys):
+    # a decay CSV without units (needs --units m m/s^2) and the impact UFF, which states
+    # its own units and refuses two for its three channels: each file read as it needs
+    src = _strip_units(DATA / "SYNTHETIC_smart_beam_decay.csv", tmp_path / "decay.csv")
+    impact = DATA / "SYNTHETIC_smart_beam_impact.uff"
+    assert main(["init", str(tmp_path / "s"), "--structure", str(STRUCTURE),
+                 "--measurements", str(impact), str(src), "--units", "m", "m/s^2"]) == 0
+    out = capsys.readouterr().out
+    assert "decay.csv: decay" in out
+    assert "impact.uff: impact (read without the reader options" in out
+    study = load_study(tmp_path / "s" / "study.toml")
+    meas = study.config["measurements"]
+    assert meas["decay"]["read_options"] == {"units": ["m", "m/s^2"]}
+    assert not meas["impact"].get("read_options")
+    text = (tmp_path / "s" / "study.toml").read_text()
+    assert text.count("read_options =") == 1
+    # a file that reads neither way is still listed with the first error
+    res = init_study(tmp_path / "t", structure=STRUCTURE, measurements=[src],
+                     read_options={"units": ["m"]})
+    assert res.tests[0]["kind"] == "skipped" and "units" in res.tests[0]["why"]
