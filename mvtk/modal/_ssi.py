@@ -36,6 +36,12 @@ def _correlations(y, yr, nlag):
 _MAX_TOEPLITZ_ROWS = 2000
 
 
+def _blas_limits():
+    from ..fe._solvers import _blas_limits as limits
+
+    return limits()
+
+
 def _decimate(y, fs, fmax):
     """``y`` decimated to the lowest rate with ``fmax`` below 0.4 x the new rate."""
     import scipy.signal
@@ -57,6 +63,25 @@ def _time_history_like(th, y, fs):
     coords["time"] = float(th["time"].values[0]) + np.arange(y.shape[1]) / fs
     return xr.DataArray(y, dims=("channel", "time"), coords=coords, attrs=th.attrs,
                         name=th.name)
+
+
+def _lowest_peak_hz(y, fs, fmax) -> float:
+    """Frequency (Hz) of the lowest peak that stands out of the record's spectrum (0 if
+    none): :func:`mvtk.signal.find_peaks` on the summed channel amplitude spectra
+    (Welch, segments of 1/8 of the record), lines below 2 line spacings skipped."""
+    import scipy.signal
+
+    from ..errors import MvtkError
+    from ..signal import find_peaks
+
+    nper = 2 ** int(np.floor(np.log2(max(y.shape[1] / 8, 16))))
+    f, pxx = scipy.signal.welch(y, fs, nperseg=nper, axis=1)
+    try:
+        peaks = find_peaks(np.sqrt(pxx), f, power=False, fmin=2 * fs / nper, fmax=fmax)
+    except MvtkError:
+        return 0.0
+    fn = np.asarray(peaks.fn_hz, dtype=float)
+    return float(fn.min()) if fn.size else 0.0
 
 
 def _warn_power_below(y, lo, hi, i, fs):
@@ -120,9 +145,10 @@ def ssi_cov(
         to the lowest rate keeping ``fmax`` below 0.4 x the new rate. The band's lower
         end is raised to the lowest frequency the block rows resolve,
         ``fs / (2 n_lags)`` (Rainieri & Fabbrocino 2014, ch. 4: ``i >= fs / (2 f_0)``
-        for the lowest frequency ``f_0`` of interest); with ``fmin`` given and
-        ``n_lags`` not, ``n_lags`` is raised to resolve ``fmin`` (up to 2000 rows of the
-        Toeplitz matrix). A record whose largest spectral line or more than 25 % of whose
+        for the lowest frequency ``f_0`` of interest). Without ``n_lags``, ``n_lags``
+        is raised to resolve ``fmin``, or without ``fmin`` 0.9 x the record's lowest
+        spectral peak (:func:`mvtk.signal.find_peaks`), up to 2000 rows of the
+        Toeplitz matrix. A record whose largest spectral line or more than 25 % of whose
         power lies below the resolved band gives a
         :class:`~mvtk.errors.ResolutionWarning` naming its largest peak there.
     orders : iterable of int
@@ -130,8 +156,9 @@ def ssi_cov(
     reference : channel selection, optional
         Reference outputs for the correlations (default every channel).
     n_lags : int, optional
-        Block rows ``i`` (default ``max(ceil((max_order + 1) / n_ref), 20)``, raised to
-        ``ceil(fs / (2 fmin))`` when ``fmin`` is given).
+        Block rows ``i``. Default: ``max(ceil((max_order + 1) / n_ref), 20)``, raised
+        to ``ceil(fs / (2 f_0))`` with ``f_0`` = ``fmin`` or 0.9 x the lowest spectral
+        peak of the record, at most ``2000 / n_channels``.
     fs : float, optional
         Sampling rate in Hz (derived from ``time`` and checked if given).
 
@@ -177,8 +204,13 @@ def ssi_cov(
     nl, nr = y.shape[0], yr.shape[0]
     pmax = int(orders.max())
     i = int(n_lags) if n_lags is not None else max(int(np.ceil((pmax + 1) / nr)), 20)
-    if n_lags is None and fmin is not None and float(fmin) > 0:
-        i = max(i, min(int(np.ceil(fs / (2 * float(fmin)))), _MAX_TOEPLITZ_ROWS // nl))
+    if n_lags is None:
+        # the lowest frequency to resolve: fmin, or the record's lowest spectral peak
+        # (with 10 % margin, so it lies inside the band, clear of its edge)
+        f0 = float(fmin) if fmin is not None and float(fmin) > 0 else \
+            0.9 * _lowest_peak_hz(y, fs, fmax)
+        if f0 > 0:
+            i = max(i, min(int(np.ceil(fs / (2 * f0))), _MAX_TOEPLITZ_ROWS // nl))
     if i * nr < pmax or i * nl < pmax:
         raise ParameterError(
             f"ssi_cov: n_lags={i} block rows give a Toeplitz matrix of rank <= "
@@ -191,11 +223,6 @@ def ssi_cov(
             + f" are too few for {i} block rows (need > {4 * (2 * i + 2)}): a longer "
             "record, fewer model orders, or a smaller n_lags"
         )
-    R = _correlations(y, yr, 2 * i + 1)                     # (2i+1, nl, nr)
-    a = np.arange(i)
-    k = i + a[:, None] - a[None, :]                          # lag index R_{i+a-b}
-    T = R[k].transpose(0, 2, 1, 3).reshape(i * nl, i * nr)
-    U, S, _ = np.linalg.svd(T, full_matrices=False)
     lo = 0.0 if fmin is None else float(fmin)
     hi = fs / 2 if fmax is None else float(fmax)
     if not (0 <= lo < hi <= fs / 2):
@@ -209,25 +236,34 @@ def ssi_cov(
             f"{int(np.ceil(fs / (2 * max(lo, hi / 10))))} or give fmax (decimation)"
         )
     lo = max(lo, floor)
-    per_order = []
-    for n in orders:
-        O = U[:, :n] * np.sqrt(S[:n])[None, :]
-        C = O[:nl]
-        A = np.linalg.lstsq(O[:-nl], O[nl:], rcond=None)[0]
-        mu, V = np.linalg.eig(A)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            lam = np.log(mu.astype(complex)) * fs
-        good = np.isfinite(lam)
-        shp = (C @ V).T[good]
-        nrm = np.linalg.norm(shp, axis=1, keepdims=True)
-        per_order.append((int(n), lam[good], shp / np.where(nrm > 0, nrm, 1)))
-    nper = min(y.shape[1], max(256, 2 ** int(np.ceil(np.log2(fs / max(hi - lo, 1e-9) * 64)))))
-    G = signal.csd(th, fs=fs, nperseg=int(min(nper, y.shape[1])))
-    f = G["frequency"].values
-    band = (f >= lo) & (f <= hi)
-    _warn_power_below(y, lo, hi, i, fs)
-    ind = cmif(G.values[:, :, band])
-    return poles_to_diagram("SSI-cov", per_order, (lo, hi), f[band], ind, crit)
+    # one BLAS thread: the SVD and the per-order solves are 4-100x slower with a
+    # second OpenBLAS thread on a loaded 2-core machine (measured: a 1236-row SVD
+    # 12 s against 2.7 s)
+    with _blas_limits():
+        R = _correlations(y, yr, 2 * i + 1)                     # (2i+1, nl, nr)
+        a = np.arange(i)
+        k = i + a[:, None] - a[None, :]                          # lag index R_{i+a-b}
+        T = R[k].transpose(0, 2, 1, 3).reshape(i * nl, i * nr)
+        U, S, _ = np.linalg.svd(T, full_matrices=False)
+        per_order = []
+        for n in orders:
+            O = U[:, :n] * np.sqrt(S[:n])[None, :]
+            C = O[:nl]
+            A = np.linalg.lstsq(O[:-nl], O[nl:], rcond=None)[0]
+            mu, V = np.linalg.eig(A)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lam = np.log(mu.astype(complex)) * fs
+            good = np.isfinite(lam)
+            shp = (C @ V).T[good]
+            nrm = np.linalg.norm(shp, axis=1, keepdims=True)
+            per_order.append((int(n), lam[good], shp / np.where(nrm > 0, nrm, 1)))
+        nper = min(y.shape[1], max(256, 2 ** int(np.ceil(np.log2(fs / max(hi - lo, 1e-9) * 64)))))
+        G = signal.csd(th, fs=fs, nperseg=int(min(nper, y.shape[1])))
+        f = G["frequency"].values
+        band = (f >= lo) & (f <= hi)
+        _warn_power_below(y, lo, hi, i, fs)
+        ind = cmif(G.values[:, :, band])
+        return poles_to_diagram("SSI-cov", per_order, (lo, hi), f[band], ind, crit)
 
 
 def identify_output_only(
