@@ -168,18 +168,25 @@ def excitation_level(h, fn_hz) -> np.ndarray:
 def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz=None,
                   contribution=None, min_contribution=0.1, local=None, min_local=0.8,
                   support=None, min_support=MIN_SUPPORT, half_hz=None,
-                  excitation_db=None, min_excitation_db=None, excitation_name="force"):
+                  excitation_db=None, min_excitation_db=None, excitation_name="force",
+                  kurtosis=None, max_harmonic_kurtosis=None):
     """``reliable`` and ``reason`` per mode from the stated criteria."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
+    kurtosis = nan if kurtosis is None else kurtosis
     contribution = nan if contribution is None else contribution
     local = nan if local is None else local
     support = nan if support is None else support
     half_hz = nan if half_hz is None else half_hz
     excitation_db = nan if excitation_db is None else excitation_db
-    for f, z, m, c, q, loc, sup, hw, ex in zip(fn, zeta, mpc_v, count, contribution, local,
-                                               support, half_hz, excitation_db):
+    for f, z, m, c, q, loc, sup, hw, ex, ku in zip(fn, zeta, mpc_v, count, contribution,
+                                                   local, support, half_hz, excitation_db,
+                                                   kurtosis):
         why = []
+        if max_harmonic_kurtosis is not None and np.isfinite(ku) and ku < max_harmonic_kurtosis:
+            why.append(f"harmonic: kurtosis of the band-passed response {ku:.2f} "
+                       f"(< {max_harmonic_kurtosis:g}; a sinusoid gives 1.5, a mode's random "
+                       "response 3)")
         if (min_excitation_db is not None and np.isfinite(ex)
                 and ex < min_excitation_db):
             why.append(f"weakly excited: {excitation_name} {ex:.0f} dB re its maximum in "

@@ -66,6 +66,12 @@ class IdentifiedModes:
         excitation level (UFF 58 and other FRF files). Below the threshold of the
         excitation type (``mvtk.modal._identify.WEAK_EXCITATION_DB``: impact -35 dB,
         sweep and random -50 dB) the mode is marked not reliable ("weakly excited").
+    kurtosis : numpy.ndarray or None
+        SSI-cov: kurtosis of the response band-passed around each mode on its strongest
+        channel (:func:`mvtk.modal._harmonics.band_kurtosis`; 3 for a mode's response to
+        random excitation, 1.5 for a sinusoid). Below
+        :data:`~mvtk.modal._harmonics.HARMONIC_KURTOSIS` (2.0) the mode is marked not
+        reliable ("harmonic"). ``None`` (pLSCF+LSFD).
     """
 
     method: str
@@ -89,6 +95,7 @@ class IdentifiedModes:
     diagram: StabilisationDiagram
     support: np.ndarray | None = None
     excitation_db: np.ndarray | None = None
+    kurtosis: np.ndarray | None = None
 
     @property
     def n_modes(self) -> int:
@@ -97,17 +104,18 @@ class IdentifiedModes:
 
     def to_dataframe(self) -> pd.DataFrame:
         """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support
-        excitation_db reliable reason`` (``support``, ``excitation_db`` NaN where they
-        do not apply, e.g. SSI-cov, FRFs without the force)."""
-        support = (np.full(self.n_modes, np.nan) if self.support is None
-                   else np.asarray(self.support, dtype=float))
-        exc = (np.full(self.n_modes, np.nan) if self.excitation_db is None
-               else np.asarray(self.excitation_db, dtype=float))
+        excitation_db kurtosis reliable reason`` (``support``, ``excitation_db``,
+        ``kurtosis`` NaN where they do not apply: SSI-cov has no FRFs, FRFs without the
+        force no excitation level, pLSCF no time histories)."""
+        def column(v):
+            return (np.full(self.n_modes, np.nan) if v is None
+                    else np.asarray(v, dtype=float))
+
         return pd.DataFrame({
             "mode": np.arange(1, self.n_modes + 1),
             "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
-            "stability_count": self.stability_count, "support": support,
-            "excitation_db": exc,
+            "stability_count": self.stability_count, "support": column(self.support),
+            "excitation_db": column(self.excitation_db), "kurtosis": column(self.kurtosis),
             "reliable": self.reliable, "reason": list(self.reason),
         })
 

@@ -283,6 +283,9 @@ def identify_output_only(
     Same selection machinery and quality table as :func:`mvtk.modal.identify`; shapes
     are unscaled (``normalisation="unit_max"``: output-only data carry no force) and
     there is no FRF synthesis (``frf``, ``synthesised``, ``correlation`` are None).
+    Each mode also gets the kurtosis of its band-passed response
+    (:func:`mvtk.modal._harmonics.band_kurtosis`): below 2.0 it is marked not reliable
+    as a harmonic (a sinusoid has 1.5, a mode's random response 3).
     Parameters as in :func:`ssi_cov`; ``fn_hz`` selects the poles nearest those
     frequencies instead of clustering.
     """
@@ -317,11 +320,16 @@ def identify_output_only(
     # one channel: the shape is a single number; MPC and MPD say nothing (NaN)
     mpc_v = mpc(cplx) if len(names) > 1 else np.full(nm, np.nan)
     mpd_v = mpd(cplx) if len(names) > 1 else np.full(nm, np.nan)
+    from ._harmonics import HARMONIC_KURTOSIS, band_kurtosis
+
+    kurt = band_kurtosis(th.values, signal.sampling_rate(th), fn, zeta)
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
-                                     diagram.band_hz, stab.zeta_max)
+                                     diagram.band_hz, stab.zeta_max, kurtosis=kurt,
+                                     max_harmonic_kurtosis=HARMONIC_KURTOSIS)
     return IdentifiedModes(
         method="SSI-cov", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp, real_shapes=rshp,
         participation=None, mpc=mpc_v, mpd=mpd_v, stability_count=sel.count,
         reliable=reliable, reason=reason, frf=None, synthesised=None, correlation=None,
         residue=None, lower_residual=None, upper_residual=None, diagram=diagram,
+        kurtosis=kurt,
     )
