@@ -177,6 +177,11 @@ def run(args: argparse.Namespace) -> int:
     verdict = (f"{n_ok} of {len(table)} estimate(s) reliable" if n_ok else
                f"no reliable estimate: the data cannot support the {method} damping "
                f"estimate (see the reason column)")
+    if not n_ok and method in ("envelope", "log_decrement") and "reason" in table:
+        not_decay = table["reason"].str.contains("not one free decay|falls only|does not decay|no decay")
+        if bool(not_decay.all()):
+            verdict += ("; the records are not free decays: for ambient or operational "
+                        "records use `mvtk modal` (SSI-cov)")
     if args.json:
         sys.stdout.write(table.to_json(orient="records") + "\n")
     else:

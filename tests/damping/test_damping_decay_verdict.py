@@ -107,3 +107,18 @@ def test_a_clean_exponential_has_equal_halves(rng):
         r = estimator(x)
         assert r.reliable[0], r.reason[0]
         assert r.zeta_late[0] == pytest.approx(r.zeta_early[0], rel=0.1)
+
+
+@pytest.mark.shared_data
+def test_cli_points_ambient_records_to_operational_modal_analysis(shared_data, capsys):
+    # 10 min of tower accelerations of a wind turbine in operation: no channel is a
+    # free decay, and the command says what to use instead
+    from mvtk.cli import main
+
+    src = shared_data / "tdms" / "good_tdms_1.tdms"
+    if not src.is_file():
+        pytest.skip(f"{src} not found")
+    assert main(["damping", str(src)]) == 1
+    out = capsys.readouterr()
+    assert "not free decays" in out.err and "mvtk modal" in out.err
+    assert "True" not in out.out.split("reliable", 1)[1]
