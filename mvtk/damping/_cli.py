@@ -178,7 +178,8 @@ def run(args: argparse.Namespace) -> int:
                f"no reliable estimate: the data cannot support the {method} damping "
                f"estimate (see the reason column)")
     if not n_ok and method in ("envelope", "log_decrement") and "reason" in table:
-        not_decay = table["reason"].str.contains("not one free decay|falls only|does not decay|no decay")
+        not_decay = table["reason"].str.contains(
+            "not one free decay|falls only|does not decay|no decay")
         if bool(not_decay.all()):
             verdict += ("; the records are not free decays: for ambient or operational "
                         "records use `mvtk modal` (SSI-cov)")

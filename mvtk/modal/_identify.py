@@ -380,8 +380,9 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     tot_num = np.abs(np.sum(Hm * np.conj(Sv))) ** 2
     tot_den = np.sum(np.abs(Hm) ** 2) * np.sum(np.abs(Sv) ** 2)
     corr.attrs["overall"] = float(tot_num / tot_den) if tot_den > 0 else 0.0
-    mpc_v = mpc(cplx) if no > 1 else np.ones(nm)
-    mpd_v = mpd(cplx) if no > 1 else np.zeros(nm)
+    # one response: the shape is one number; MPC and MPD say nothing (NaN)
+    mpc_v = mpc(cplx) if no > 1 else np.full(nm, np.nan)
+    mpd_v = mpd(cplx) if no > 1 else np.full(nm, np.nan)
     need = clus.min_count
     df = float(np.median(np.diff(f)))
     contrib = _contribution(fit, h)

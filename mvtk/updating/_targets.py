@@ -278,8 +278,8 @@ def targets_from_shapes(
     quality : pandas.DataFrame, optional
         Per-mode identification quality (the ``mvtk.modal`` table), indexed by mode or
         with a ``mode`` column; ``mpc`` (0..1) and ``reliable`` (bool) are used: the
-        weight of a target is its ``mpc`` (1 when absent), 0 when not ``reliable`` or
-        when ``mpc < min_mpc``.
+        weight of a target is its ``mpc`` (1 when absent or NaN), 0 when not
+        ``reliable`` or when ``mpc < min_mpc``.
     min_mpc : float
     labels : sequence of str, optional
 
@@ -316,7 +316,8 @@ def targets_from_shapes(
             if m not in q.index:
                 raise ParameterError(f"quality table has no row for mode {m}")
             row = q.loc[m]
-            if "mpc" in q.columns:
+            # NaN MPC (a one-DOF shape: no evidence either way) keeps the weight 1
+            if "mpc" in q.columns and np.isfinite(float(row["mpc"])):
                 w[k] = float(row["mpc"]) if float(row["mpc"]) >= min_mpc else 0.0
             if "reliable" in q.columns and not bool(row["reliable"]):
                 w[k] = 0.0
