@@ -533,8 +533,8 @@ def craig_bampton(
     nr = nl + nm
     MKT = np.empty((ndof, 2 * nr))
     MKT[:, :nr], MKT[:, nr:] = M @ T, K_nz @ T
-    # one single-threaded product T' [M T, K T] (BLAS threads on a shared machine made
-    # this 78 MFlop product take up to 1 s of wall time, measured)
+    # one single-threaded product T' [M T, K T] (with two BLAS threads competing for a
+    # shared machine's cores, T' (M T) alone, 78 MFlop, took up to 1 s; measured)
     with _blas_limits():
         MrKr = T.T @ MKT
     Mr, Kr = MrKr[:, :nr], MrKr[:, nr:]
