@@ -530,14 +530,12 @@ def craig_bampton(
     T = np.zeros((ndof, nl + nm))
     T[lset, np.arange(nl)] = 1.0
     T[fset] = np.hstack([psi, phi])
-    nr = nl + nm
-    MKT = np.empty((ndof, 2 * nr))
-    MKT[:, :nr], MKT[:, nr:] = M @ T, K_nz @ T
-    # one single-threaded product T' [M T, K T] (with two BLAS threads competing for a
-    # shared machine's cores, T' (M T) alone, 78 MFlop, took up to 1 s; measured)
+    # single-threaded products (with two BLAS threads competing for a shared machine's
+    # cores, T' (M T), 78 MFlop, took up to 1 s; measured); one n x n_r temporary at a
+    # time, as T itself
     with _blas_limits():
-        MrKr = T.T @ MKT
-    Mr, Kr = MrKr[:, :nr], MrKr[:, nr:]
+        Mr = T.T @ (M @ T)
+        Kr = T.T @ (K_nz @ T)
     Mr = 0.5 * (Mr + Mr.T)
     Kr = 0.5 * (Kr + Kr.T)
     labels = tuple(
