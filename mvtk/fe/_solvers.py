@@ -698,7 +698,7 @@ def _start_block(ndof: int, v0, M, width: int, seed: int = 0) -> np.ndarray:
 def eigsh_lowest(
     K, M, n: int, sigma: float | None = None, tol: float | None = None,
     singular_shift: float | None = None, v0: np.ndarray | None = None,
-    backend: str = "auto", method: str = "auto",
+    backend: str = "auto", method: str = "auto", factorization: Factorization | None = None,
 ) -> EigenSolution:
     """Lowest ``n`` eigenpairs of the generalised symmetric problem by shift-invert.
 
@@ -753,6 +753,10 @@ def eigsh_lowest(
         between 4 and 10 modes requested, 3e-10).
         ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
         Both keep the Sturm check for missed copies of repeated eigenvalues.
+    factorization : Factorization, optional
+        A factorisation of ``K - sigma M`` already made (:func:`factorize`; ``sigma`` 0
+        when not given), used instead of factorising again (Craig-Bampton reuses the
+        one of its interior stiffness). ``n_factorizations`` then counts none for it.
 
     Returns
     -------
@@ -779,7 +783,9 @@ def eigsh_lowest(
         w, v = sla.eigh(K.toarray(), M.toarray())
         w, v = w[:n], v[:, :n]
     else:
-        lu = None
+        lu, solves0 = factorization, getattr(factorization, "n_solves", 0)
+        if lu is not None and sigma is None:
+            sigma = 0.0
         if sigma is None:
             sigma, lu = _default_shift(K, M, singular_shift, backend)
             n_fact += 1
@@ -842,7 +848,7 @@ def eigsh_lowest(
                 "repeated eigenvalue were still missing after 3 Lanczos runs (Sturm count "
                 "of K - tau M); request more modes")
         w, v = w[:n], v[:, :n]
-        n_solves = lu.n_solves
+        n_solves = lu.n_solves - solves0
     # mass-normalise explicitly (eigsh returns M-orthonormal vectors already, up to
     # round-off; the dense path does too, but be explicit and fix a sign convention)
     mnorm = np.sqrt(np.einsum("ij,ij->j", v, M @ v))

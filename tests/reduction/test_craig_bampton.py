@@ -299,3 +299,98 @@ def test_solve_columns_matches_dense(beam, rng):
     np.testing.assert_allclose(solve_columns(lu, B), ref, rtol=1e-7, atol=1e-12)
     np.testing.assert_allclose(solve_columns(lu, sp.csc_matrix(B)), ref, rtol=1e-7, atol=1e-12)
     np.testing.assert_allclose(solve_columns(lu, B[:, 0]), ref[:, 0], rtol=1e-7, atol=1e-12)
+
+
+HAS_CHOLMOD = __import__("mvtk.fe._solvers", fromlist=["x"])._cholmod_module() is not None
+BACKENDS = ["superlu", pytest.param("cholmod", marks=pytest.mark.skipif(
+    not HAS_CHOLMOD, reason="sksparse-minimal (mvtk[cholmod]) not installed"))]
+
+
+@pytest.fixture(scope="module")
+def long_beam():
+    """400-element cantilever: 798 interior DOFs with the tip retained (sparse path)."""
+    return eb_beam_xz(n_el=400)
+
+
+def _interior(model, retained):
+    import scipy.sparse as sp
+
+    se = craig_bampton(model, retained, 0)
+    f = np.setdiff1d(np.arange(model.n_dof), se.boundary_dofs)
+    return (sp.csc_matrix(model.K[f][:, f]), sp.csr_matrix(model.M[f][:, f]), f)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_sparse_fixed_interface_modes_closed_form_and_dense(long_beam, backend, monkeypatch):
+    """Interior above the dense limit: block Lanczos of mvtk.fe on the K_ff factorisation
+    (no second factorisation) gives the clamped-clamped beam (Blevins table 8-1) and
+    the dense generalised eigenpairs to round-off."""
+    from mvtk.fe import _solvers, factorize
+
+    kff, mff, _ = _interior(long_beam, ["tip"])
+    assert kff.shape[0] > cb_module._DENSE_LIMIT
+    lu = factorize(kff, backend=backend)
+
+    def no_factorize(*args, **kwargs):
+        raise AssertionError("the fixed-interface eigen solve factorised again")
+
+    monkeypatch.setattr(_solvers, "factorize", no_factorize)
+    nu2, phi = cb_module.fixed_interface_modes(kff, mff, lu, 4)
+    monkeypatch.undo()
+    EI, rA, L = (long_beam.meta[k] for k in ("EI", "rhoA", "length"))
+    cc = np.array([4.730040745, 7.853204624, 10.99560784, 14.13716549])
+    exact = cc**2 / (2 * np.pi * L**2) * np.sqrt(EI / rA)
+    np.testing.assert_allclose(np.sqrt(nu2) / (2 * np.pi), exact, rtol=1e-6)
+    # dense reference from the inverse pencil M v = mu K v (factorises K; eigh(K, M)
+    # loses 7e-6 relative on this pencil). cond(K_ff) is 8e11: the round-off floor of
+    # the eigenvalues is ~1e-8 relative (ARPACK's, the dense ones, the block Lanczos
+    # ones with either backend spread 1.3e-9-1.2e-8), hence rtol 3e-8
+    n = kff.shape[0]
+    mu, v = sla.eigh(mff.toarray(), kff.toarray(), subset_by_index=[n - 4, n - 1])
+    w2, v = 1.0 / mu[::-1], v[:, ::-1]
+    v = v / np.sqrt(np.einsum("ij,ij->j", v, mff @ v))
+    np.testing.assert_allclose(nu2, w2, rtol=3e-8)
+    np.testing.assert_allclose(phi.T @ (mff @ phi), np.eye(4), atol=1e-12)
+    # (signs aligned: the largest entries of these symmetric and antisymmetric modes
+    # come in +- pairs, so the largest-entry-positive rule is decided by round-off)
+    v = v * np.sign(np.einsum("ij,ij->j", v, mff @ phi))
+    np.testing.assert_allclose(phi, v, atol=1e-6 * np.abs(v).max())
+    # a raw scipy SuperLU factorisation (the former documented type) still works
+    import scipy.sparse.linalg as spla
+
+    nu2_raw, _ = cb_module.fixed_interface_modes(kff, mff, spla.splu(kff), 4)
+    np.testing.assert_allclose(nu2_raw, w2, rtol=3e-8)
+
+
+def test_eigsh_lowest_with_given_factorization(long_beam):
+    """``factorization=`` reuses it: same eigenpairs as factorising, none made, and
+    only the solve's own right-hand sides counted."""
+    from mvtk.fe import factorize
+
+    kff, mff, _ = _interior(long_beam, ["tip"])
+    ref = eigsh_lowest(kff, mff, 5)
+    lu = factorize(kff)
+    lu.solve(np.ones(kff.shape[0]))
+    sol = eigsh_lowest(kff, mff, 5, factorization=lu)
+    assert sol.n_factorizations == 0 and sol.n_solves == lu.n_solves - 1 > 0
+    np.testing.assert_allclose(sol.omega2, ref.omega2, rtol=3e-8)
+    np.testing.assert_allclose(np.abs(sol.vectors.T @ (mff @ ref.vectors)), np.eye(5),
+                               atol=1e-8)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_solve_columns_blocks_match_dense(beam, rng, backend):
+    """Multi-right-hand-side solves in chunks (dense and sparse B) vs a dense solve."""
+    import scipy.sparse as sp
+
+    from mvtk.fe import factorize
+
+    lu = factorize(beam.K, backend=backend)
+    B = rng.standard_normal((beam.n_dof, 7))
+    B[:, 3] = 0.0
+    ref = np.linalg.solve(beam.K.toarray(), B)
+    for chunk in (1, 3, 64):
+        for b in (B, sp.csc_matrix(B), sp.csr_matrix(B)):
+            x = cb_module.solve_columns(lu, b, chunk=chunk)
+            assert x.shape == B.shape and x.flags.f_contiguous
+            np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
