@@ -399,11 +399,9 @@ def _trial_scale_bound(model: FEModel) -> float:
     return _smooth_trial_scale(model, pairs={(a, d)})
 
 
-def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
-    """M-weighted share of each vector outside the span of the rigid-body motions.
-
-    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
-    """
+def _rigid_fields(model: FEModel) -> np.ndarray:
+    """The six rigid-body motions (translations, rotations about the centroid) over the
+    model's free DOFs, shape (n_dof, 6)."""
     xyz = model.nodes
     c = xyz.mean(axis=0)
     full = np.zeros((model.n_nodes, 6, 6))
@@ -412,7 +410,33 @@ def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
         axis = np.eye(3)[j]
         full[:, :3, 3 + j] = np.cross(axis, xyz - c)
         full[:, 3 + j, 3 + j] = 1.0
-    R = full.reshape(model.n_nodes * 6, 6)[model.dof_node * 6 + model.dof_component]
+    return full.reshape(model.n_nodes * 6, 6)[model.dof_node * 6 + model.dof_component]
+
+
+def _unsupported(model: FEModel) -> bool:
+    """True when K has no stiffness against any rigid-body motion (a free structure).
+
+    One product of K with a fixed combination of the six rigid-body motions (1.0, 1.1,
+    ..., 1.5): below 1e-10 of ``max K_ii`` times its size, K annihilates it to round-off
+    and, but for an exact cancellation between the motions' forces, every one of them,
+    so K is singular. Either way the answer is only used to choose a negative shift,
+    which is valid for any K (the factorisation of ``K - sigma M`` is then positive
+    definite); it spares the factorisations that find a singular K out.
+    """
+    r = _rigid_fields(model) @ (1.0 + 0.1 * np.arange(6))
+    size = float(np.abs(r).max(initial=0.0))
+    if size == 0.0:
+        return False
+    kscale = float(np.abs(model.K.diagonal()).max(initial=0.0))
+    return bool(np.abs(model.K @ r).max(initial=0.0) <= 1e-10 * kscale * size)
+
+
+def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
+    """M-weighted share of each vector outside the span of the rigid-body motions.
+
+    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
+    """
+    R = _rigid_fields(model)
     MR = model.M @ R
     G = R.T @ MR
     keep = np.diag(G) > 1e-14 * max(np.diag(G).max(), 1e-300)
@@ -496,6 +520,12 @@ def modal_analysis(
             memo.append(_smooth_trial_scale(model))
         return memo[0]
 
+    if sigma is None and _unsupported(model):
+        # K is singular (rigid-body modes): the negative shift eigsh_lowest would pick
+        # after finding that out by factorising K, without those factorisations
+        q = trial()
+        if np.isfinite(q) and q > 0:
+            sigma = -1e-2 * q
     sol = _lowest_modes(model, int(n_modes), sigma, trial)
     w2 = sol.omega2
     if rigid_tol_hz is None:
