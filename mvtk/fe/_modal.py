@@ -250,14 +250,17 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
                 # warped or differently oriented elements: the general transformation
                 xy, T = shell_local_geometry(model.nodes[c], ax)
                 ue = T @ u[dofs]  # element-frame DOFs
+                uT = ue.transpose(1, 0, 2)
             else:
                 # exactly flat elements sharing one frame R (a flat plate): T is R on
                 # every 3-vector (translations, rotations) of every node, applied as one
-                # product, and not at all when R is the identity (a plate in x-y)
+                # product, and not at all when R is the identity (a plate in x-y);
+                # gathered element DOF first, the layout of the products below
                 xy = local[:, :, :2]
-                ug = u[dofs].reshape(len(c), -1, 3, k)
-                ue = ug if np.array_equal(R[0], np.eye(3)) else R[0] @ ug
-                ue = ue.reshape(len(c), -1, k)
+                uT = u[dofs.T]                                      # (n_e_dof, n_el, k)
+                if not np.array_equal(R[0], np.eye(3)):
+                    uT = (R[0] @ uT.reshape(-1, 3, len(c) * k)).reshape(uT.shape)
+                ue = uT.transpose(1, 0, 2)
             # identical element shapes share their matrices (structured meshes): the four
             # parts of each distinct shape come from one element-matrix call
             scale = max(float(np.abs(xy).max()), 1e-300)
@@ -281,7 +284,7 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
                     # |B u|^2 with K_p = B' B (see _part_factors): one matrix product
                     # with the few rows of B (20 instead of 4 x 24 for a MITC4 quad)
                     B, S = factors[tags[g]]
-                    ug = ue[sel].transpose(1, 0, 2).reshape(ue.shape[1], -1)
+                    ug = uT[:, sel].reshape(uT.shape[0], -1)
                     y = B @ ug
                     e[:, sel] = (S @ (y * y)).reshape(4, -1, k)
             else:
