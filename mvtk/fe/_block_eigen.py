@@ -114,23 +114,19 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
     m = V0.shape[1]
     V[:, :m], MV[:, :m] = V0, MV0
     lo = 0                               # current block: columns lo:m
-    plo = 0                              # previous block: columns plo:lo
     n_steps = 1
     rng = np.random.default_rng(seed + 1)
     while True:
         W = np.asfortranarray(solve(np.ascontiguousarray(MV[:, lo:m])))
         n_steps += 1
         Vm, MVm = V[:, :m], MV[:, :m]
-        # block Lanczos recurrence (against the current and the previous block), then
-        # one classical Gram-Schmidt pass against the whole basis, which takes out the
-        # components that round-off leaves along older vectors: BLAS-3 calls on the
-        # Fortran-ordered basis (numpy's V @ C was 3-4x slower on it); the whole basis
-        # is read twice per step instead of four times (Gram-Schmidt twice)
-        C1 = _gemm(1.0, MV[:, plo:m], W, trans_a=True)
-        W = _gemm(-1.0, V[:, plo:m], C1, beta=1.0, c=W)
+        # classical Gram-Schmidt twice, as BLAS-3 calls on the Fortran-ordered basis
+        # (numpy's V @ C was 3-4x slower on it)
         C = _gemm(1.0, MVm, W, trans_a=True)
         W = _gemm(-1.0, Vm, C, beta=1.0, c=W)
-        C[plo:m] += C1
+        C2 = _gemm(1.0, MVm, W, trans_a=True)
+        W = _gemm(-1.0, Vm, C2, beta=1.0, c=W)
+        C += C2
         # a direction whose M-norm fell below 1e-10 of the block's norm before the
         # orthogonalisation (|w|^2 = |w_orth|^2 + |C|^2) is in the basis' span: lost
         MW = _mprod(M, W)
@@ -178,7 +174,7 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
             T = T2
         T[m:m + r, lo:m] = R[:r]
         V[:, m:mn], MV[:, m:mn] = Vn, MVn
-        plo, lo, m = lo, m, mn
+        lo, m = m, mn
 
 
 def _mprod(M, W: np.ndarray) -> np.ndarray:
