@@ -350,7 +350,7 @@ def mode_type(model: FEModel, shape: np.ndarray) -> str:
     return "in-plane" if comp[0] + comp[1] > comp[2] else "bending"
 
 
-def _smooth_trial_scale(model: FEModel, pairs=None) -> float:
+def _smooth_trial_scale(model: FEModel, pairs=None, origins=(0, 1, 2)) -> float:
     """Smallest Rayleigh quotient (rad/s)^2 of smooth quadratic bending trial fields.
 
     Fields ``u_d = s_a^2`` with the Kirchhoff-consistent rotation
@@ -360,8 +360,9 @@ def _smooth_trial_scale(model: FEModel, pairs=None) -> float:
     elastic eigenvalue of a free or partly supported structure; used to place the
     negative shift of a singular problem.
 
-    ``pairs``, a set of (a, d), restricts the fields to those pairs: the minimum over
-    fewer fields is an upper bound of the full one.
+    ``pairs``, a set of (a, d), and ``origins`` (0: minimum, 1: centroid, 2: maximum)
+    restrict the fields: the minimum over fewer fields is an upper bound of the full
+    one.
     """
     node, comp = model.dof_node, model.dof_component
     xyz = model.nodes
@@ -369,8 +370,8 @@ def _smooth_trial_scale(model: FEModel, pairs=None) -> float:
     for a in range(3):
         if np.ptp(xyz[:, a]) == 0:
             continue
-        for origin in (xyz[:, a].min(), xyz[:, a].mean(), xyz[:, a].max()):
-            s_a = xyz[:, a] - origin
+        for o in origins:
+            s_a = xyz[:, a] - (xyz[:, a].min(), xyz[:, a].mean(), xyz[:, a].max())[o]
             for d in range(3):
                 if d == a or (pairs is not None and (a, d) not in pairs):
                     continue
@@ -390,16 +391,17 @@ def _smooth_trial_scale(model: FEModel, pairs=None) -> float:
 
 
 def _trial_scale_bound(model: FEModel) -> float:
-    """Upper bound of :func:`_smooth_trial_scale` from three of its fields.
+    """Upper bound of :func:`_smooth_trial_scale` from four of its fields.
 
-    The fields bend the longest extent of the model along its shortest (a plate in x-y
-    along z; the cantilever shape of a plate or beam clamped at one end): one product
-    with K and M of three vectors instead of twelve or more.
+    The fields bend each of the two longest extents of the model along the shortest
+    (a plate in x-y: along z), from either end (the cantilever shape of a plate or beam
+    clamped along one edge): one product with K and M of four vectors instead of twelve
+    or more.
     """
     ext = np.ptp(model.nodes, axis=0)
-    a = int(np.argmax(ext))
-    d = int(np.argmin(np.where(np.arange(3) == a, np.inf, ext)))
-    return _smooth_trial_scale(model, pairs={(a, d)})
+    d = int(np.argmin(ext))
+    pairs = {(a, d) for a in range(3) if a != d}
+    return _smooth_trial_scale(model, pairs=pairs, origins=(0, 2))
 
 
 def _rigid_fields(model: FEModel) -> np.ndarray:
@@ -539,7 +541,7 @@ def modal_analysis(
                      (2 * np.pi * 1e-3) ** 2)
         rigid = np.abs(w2) < thresh
         low = np.abs(w2[~rigid])
-        # the candidates below need |omega2| < 1e-5 q; the minimum over three of the
+        # the candidates below need |omega2| < 1e-5 q; the minimum over four of the
         # trial fields bounds q from above, and when no mode is below 1e-5 of that
         # bound, none is a candidate and q is not needed (clamped structures)
         if low.size and (memo or low.min() < 1e-5 * _trial_scale_bound(model)):
