@@ -487,10 +487,12 @@ def modal_analysis(
     n_modes : int
         Number of modes (1 <= n_modes < n_dof).
     sigma : float, optional
-        Shift in (rad/s)^2. Default: K is factorised once; if it is positive definite
-        (all LU pivots > 1e-12 of the largest) that factorisation is reused with shift 0,
-        otherwise (rigid-body modes) the shift is -1 % of the Rayleigh quotient of a smooth
-        quadratic bending field, a few times below the first elastic eigenvalue.
+        Shift in (rad/s)^2. Default: a free structure (K annihilates the rigid-body
+        motions, :func:`_unsupported`) gets -1 % of the Rayleigh quotient of a smooth
+        quadratic bending field, a few times below the first elastic eigenvalue;
+        otherwise K is factorised once and, if a solve round trip shows it non-singular,
+        that factorisation is reused with shift 0, else (rigid-body modes of a partly
+        supported structure) the same negative shift is used.
     rigid_tol_hz : float, optional
         Modes below this frequency are rigid-body modes. Default:
         ``|omega2| < max(1e-7 max|omega2|, (2 pi 1e-3 Hz)^2)``; and also a mode whose
