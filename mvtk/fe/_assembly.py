@@ -127,14 +127,18 @@ class SparsityPattern:
         self.indptr = indptr
         # position of every element entry (e, i=(si, a), j=(sj, c))
         fi = free_index[dofs].reshape(n_el, s, b)
+        bad = fi < 0
         rank = fi - first[nodes][:, :, None]                          # (n_el, s, b)
         base = indptr[np.maximum(fi, 0)]                              # (n_el, s, b)
+        # an entry in the row or column of a constrained DOF gets a position >= nnz
+        # (base or rank set to nnz, the other terms >= 0), clipped to nnz below
+        rank[bad] = nnz
+        base[bad] = nnz
         pos = (base[:, :, :, None, None]
                + offset[pinv].reshape(n_el, s, 1, s, 1)
                + rank[:, None, None, :, :])
-        bad = (fi < 0)
-        pos[np.broadcast_to(bad[:, :, :, None, None], pos.shape)
-            | np.broadcast_to(bad[:, None, None, :, :], pos.shape)] = nnz
+        if np.any(bad):
+            np.minimum(pos, nnz, out=pos)
         self.position = pos.reshape(-1).astype(np.intp, copy=False)
 
     def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:

@@ -132,6 +132,55 @@ def _beam_groups(model: FEModel):
     return []
 
 
+def _part_factors(Kp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Factors ``B`` with ``K_p = B_p' B_p`` of the element matrices of the energy parts.
+
+    Parameters
+    ----------
+    Kp : ndarray, shape (n_parts, n, n)
+        Symmetric positive semi-definite element matrices of one element shape.
+
+    Returns
+    -------
+    B : ndarray, shape (r, n)
+        The rows ``sqrt(lambda) v'`` of every part, from the eigenpairs of its matrix
+        with ``lambda > 1e-12 lambda_max`` (the others are round-off of the rigid-body
+        and decoupled motions the part does not strain; dropping them changes an
+        energy by less than 1e-12 of ``lambda_max |u|^2``).
+    S : ndarray, shape (n_parts, r)
+        1 where row r of ``B`` belongs to the part: ``u' K_p u = (S @ (B u)**2)[p]``.
+    """
+    rows, part = [], []
+    for p, K in enumerate(Kp):
+        w, V = np.linalg.eigh(0.5 * (K + K.T))
+        keep = w > 1e-12 * w[-1] if w[-1] > 0 else np.zeros(len(w), dtype=bool)
+        rows.append(np.sqrt(w[keep])[:, None] * V[:, keep].T)
+        part.append(np.full(int(keep.sum()), p))
+    part_of = np.concatenate(part)
+    S = (part_of[None, :] == np.arange(len(Kp))[:, None]).astype(float)
+    return np.vstack(rows), S
+
+
+def _part_matrices(xy: np.ndarray, parts, n_nodes: int, lam, drill_df: float) -> np.ndarray:
+    """Element stiffness matrices of the energy parts, shape (4, n_shapes, n, n).
+
+    ``parts`` holds the (ABD, H) of each part; the drilling penalty, drill_df x A66,
+    is nonzero in the membrane part only."""
+    from ._shell import mitc4_matrices
+    from ._shell3d import mitc3_matrices
+
+    n_u = len(xy)
+    xy_p = np.tile(xy, (4, 1, 1))
+    abd_p = np.repeat(np.stack([p[0] for p in parts]), n_u, axis=0)
+    h_p = np.repeat(np.stack([p[1] for p in parts]), n_u, axis=0)
+    if n_nodes == 4:
+        Ku, _ = mitc4_matrices(xy_p, abd_p, h_p, np.zeros((1, 3)), drill_df)
+    else:
+        Ku, _ = mitc3_matrices(xy_p, abd_p, h_p, np.zeros((1, 3)),
+                               np.full(4 * n_u, lam.thickness), drill_df)
+    return Ku.reshape(4, n_u, *Ku.shape[1:])
+
+
 def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     """Strain energy of mode shapes split into bending, torsion, in-plane and axial parts.
 
@@ -162,8 +211,7 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     """
     from ._beam import _element_frames, timoshenko_element_matrices
     from ._laminate import Laminate
-    from ._shell import mitc4_matrices
-    from ._shell3d import _local_frames, mitc3_matrices, shell_local_geometry
+    from ._shell3d import _local_frames, shell_local_geometry
 
     phi = np.asarray(shapes, dtype=float)
     if phi.ndim == 1:
@@ -190,6 +238,7 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
         d_t[5, 5] = abd[5, 5]
         parts = [(d_n, zero2), (d_t, zero2), (np.zeros((6, 6)), lam.H), (a_only, zero2)]
         drill_df = 1e-3 if drill is None else drill
+        factors: dict = {}
         for start in range(0, len(conn), _CHUNK):
             c = conn[start:start + _CHUNK]
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
@@ -201,14 +250,17 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
                 # warped or differently oriented elements: the general transformation
                 xy, T = shell_local_geometry(model.nodes[c], ax)
                 ue = T @ u[dofs]  # element-frame DOFs
+                uT = ue.transpose(1, 0, 2)
             else:
                 # exactly flat elements sharing one frame R (a flat plate): T is R on
                 # every 3-vector (translations, rotations) of every node, applied as one
-                # product, and not at all when R is the identity (a plate in x-y)
+                # product, and not at all when R is the identity (a plate in x-y);
+                # gathered element DOF first, the layout of the products below
                 xy = local[:, :, :2]
-                ug = u[dofs].reshape(len(c), -1, 3, k)
-                ue = ug if np.array_equal(R[0], np.eye(3)) else R[0] @ ug
-                ue = ue.reshape(len(c), -1, k)
+                uT = u[dofs.T]                                      # (n_e_dof, n_el, k)
+                if not np.array_equal(R[0], np.eye(3)):
+                    uT = (R[0] @ uT.reshape(-1, 3, len(c) * k)).reshape(uT.shape)
+                ue = uT.transpose(1, 0, 2)
             # identical element shapes share their matrices (structured meshes): the four
             # parts of each distinct shape come from one element-matrix call
             scale = max(float(np.abs(xy).max()), 1e-300)
@@ -216,24 +268,27 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
             _, first, inv = np.unique(key, axis=0, return_index=True, return_inverse=True)
             inv = inv.ravel()
             n_u = len(first)
-            xy_u = np.tile(xy[first], (4, 1, 1))
-            abd_p = np.repeat(np.stack([p[0] for p in parts]), n_u, axis=0)
-            h_p = np.repeat(np.stack([p[1] for p in parts]), n_u, axis=0)
-            # the drilling penalty is drill_df x A66: nonzero in the membrane part only
-            if c.shape[1] == 4:
-                Ku, _ = mitc4_matrices(xy_u, abd_p, h_p, np.zeros((1, 3)), drill_df)
-            else:
-                Ku, _ = mitc3_matrices(xy_u, abd_p, h_p, np.zeros((1, 3)),
-                                       np.full(4 * n_u, lam.thickness), drill_df)
-            Ku = Ku.reshape(4, n_u, *Ku.shape[1:])
             e = np.empty((4, len(c), k))
             if n_u <= _SHARED_SHAPES:
+                # factors of the four part matrices of each distinct shape, computed once
+                # for the whole group (chunks of a structured mesh share their shapes)
+                tags = [(scale, key[i].tobytes()) for i in first]
+                new = [g for g, t in enumerate(tags) if t not in factors]
+                if new:
+                    Ku = _part_matrices(xy[first[new]], parts, c.shape[1], lam, drill_df)
+                    for j, g in enumerate(new):
+                        factors[tags[g]] = _part_factors(Ku[:, j])
                 for g in range(n_u):
                     sel = np.flatnonzero(inv == g) if n_u > 1 else slice(None)
-                    # u' K u of every element of this shape and part: one matrix product
-                    ug = ue[sel].transpose(1, 0, 2).reshape(ue.shape[1], -1)
-                    e[:, sel] = np.einsum("pij,ij->pj", Ku[:, g] @ ug, ug).reshape(4, -1, k)
+                    # u' K_p u of every element of this shape as a sum of squares
+                    # |B u|^2 with K_p = B' B (see _part_factors): one matrix product
+                    # with the few rows of B (20 instead of 4 x 24 for a MITC4 quad)
+                    B, S = factors[tags[g]]
+                    ug = uT[:, sel].reshape(uT.shape[0], -1)
+                    y = B @ ug
+                    e[:, sel] = (S @ (y * y)).reshape(4, -1, k)
             else:
+                Ku = _part_matrices(xy[first], parts, c.shape[1], lam, drill_df)
                 for part in range(4):
                     e[part] = np.einsum("eik,eij,ejk->ek", ue, Ku[part][inv], ue,
                                         optimize=True)
@@ -295,7 +350,7 @@ def mode_type(model: FEModel, shape: np.ndarray) -> str:
     return "in-plane" if comp[0] + comp[1] > comp[2] else "bending"
 
 
-def _smooth_trial_scale(model: FEModel) -> float:
+def _smooth_trial_scale(model: FEModel, pairs=None, origins=(0, 1, 2)) -> float:
     """Smallest Rayleigh quotient (rad/s)^2 of smooth quadratic bending trial fields.
 
     Fields ``u_d = s_a^2`` with the Kirchhoff-consistent rotation
@@ -304,6 +359,10 @@ def _smooth_trial_scale(model: FEModel) -> float:
     vanishes on a support along a coordinate line). Within a small factor of the first
     elastic eigenvalue of a free or partly supported structure; used to place the
     negative shift of a singular problem.
+
+    ``pairs``, a set of (a, d), and ``origins`` (0: minimum, 1: centroid, 2: maximum)
+    restrict the fields: the minimum over fewer fields is an upper bound of the full
+    one.
     """
     node, comp = model.dof_node, model.dof_component
     xyz = model.nodes
@@ -311,10 +370,10 @@ def _smooth_trial_scale(model: FEModel) -> float:
     for a in range(3):
         if np.ptp(xyz[:, a]) == 0:
             continue
-        for origin in (xyz[:, a].min(), xyz[:, a].mean(), xyz[:, a].max()):
-            s_a = xyz[:, a] - origin
+        for o in origins:
+            s_a = xyz[:, a] - (xyz[:, a].min(), xyz[:, a].mean(), xyz[:, a].max())[o]
             for d in range(3):
-                if d == a:
+                if d == a or (pairs is not None and (a, d) not in pairs):
                     continue
                 full = np.zeros((model.n_nodes, 6))
                 full[:, d] = s_a**2
@@ -331,11 +390,23 @@ def _smooth_trial_scale(model: FEModel) -> float:
     return float(np.min(kk[ok] / mm[ok])) if np.any(ok) else np.inf
 
 
-def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
-    """M-weighted share of each vector outside the span of the rigid-body motions.
+def _trial_scale_bound(model: FEModel) -> float:
+    """Upper bound of :func:`_smooth_trial_scale` from four of its fields.
 
-    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
+    The fields bend each of the two longest extents of the model along the shortest
+    (a plate in x-y: along z), from either end (the cantilever shape of a plate or beam
+    clamped along one edge): one product with K and M of four vectors instead of twelve
+    or more.
     """
+    ext = np.ptp(model.nodes, axis=0)
+    d = int(np.argmin(ext))
+    pairs = {(a, d) for a in range(3) if a != d}
+    return _smooth_trial_scale(model, pairs=pairs, origins=(0, 2))
+
+
+def _rigid_fields(model: FEModel) -> np.ndarray:
+    """The six rigid-body motions (translations, rotations about the centroid) over the
+    model's free DOFs, shape (n_dof, 6)."""
     xyz = model.nodes
     c = xyz.mean(axis=0)
     full = np.zeros((model.n_nodes, 6, 6))
@@ -344,7 +415,33 @@ def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
         axis = np.eye(3)[j]
         full[:, :3, 3 + j] = np.cross(axis, xyz - c)
         full[:, 3 + j, 3 + j] = 1.0
-    R = full.reshape(model.n_nodes * 6, 6)[model.dof_node * 6 + model.dof_component]
+    return full.reshape(model.n_nodes * 6, 6)[model.dof_node * 6 + model.dof_component]
+
+
+def _unsupported(model: FEModel) -> bool:
+    """True when K has no stiffness against any rigid-body motion (a free structure).
+
+    One product of K with a fixed combination of the six rigid-body motions (1.0, 1.1,
+    ..., 1.5): below 1e-10 of ``max K_ii`` times its size, K annihilates it to round-off
+    and, but for an exact cancellation between the motions' forces, every one of them,
+    so K is singular. Either way the answer is only used to choose a negative shift,
+    which is valid for any K (the factorisation of ``K - sigma M`` is then positive
+    definite); it spares the factorisations that find a singular K out.
+    """
+    r = _rigid_fields(model) @ (1.0 + 0.1 * np.arange(6))
+    size = float(np.abs(r).max(initial=0.0))
+    if size == 0.0:
+        return False
+    kscale = float(np.abs(model.K.diagonal()).max(initial=0.0))
+    return bool(np.abs(model.K @ r).max(initial=0.0) <= 1e-10 * kscale * size)
+
+
+def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
+    """M-weighted share of each vector outside the span of the rigid-body motions.
+
+    ``inf`` when the rigid-body part loads the structure (``|K r| > 1e-8 max K_ii |r|``).
+    """
+    R = _rigid_fields(model)
     MR = model.M @ R
     G = R.T @ MR
     keep = np.diag(G) > 1e-14 * max(np.diag(G).max(), 1e-300)
@@ -362,14 +459,19 @@ def _rigid_residual(model: FEModel, vectors: np.ndarray) -> np.ndarray:
     return np.where(force < 1e-8, share, np.inf)
 
 
-def _lowest_modes(model: FEModel, n: int, sigma: float | None):
+def _lowest_modes(model: FEModel, n: int, sigma: float | None, trial=None):
     """Lowest eigenpairs by :func:`mvtk.fe.eigsh_lowest` (one factorisation).
 
     With ``sigma=None`` the shift is 0 when K is non-singular; otherwise it is -1 % of
-    :func:`_smooth_trial_scale`, a model-aware estimate of the first elastic eigenvalue.
+    :func:`_smooth_trial_scale` (or of ``trial()``, the same value memoised by the
+    caller), a model-aware estimate of the first elastic eigenvalue.
     """
+    if trial is None:
+        def trial():
+            return _smooth_trial_scale(model)
+
     def singular_shift():  # evaluated by eigsh_lowest only when K is singular
-        return -1e-2 * _smooth_trial_scale(model)
+        return -1e-2 * trial()
 
     return eigsh_lowest(model.K, model.M, n, sigma=sigma, singular_shift=singular_shift)
 
@@ -385,10 +487,12 @@ def modal_analysis(
     n_modes : int
         Number of modes (1 <= n_modes < n_dof).
     sigma : float, optional
-        Shift in (rad/s)^2. Default: K is factorised once; if it is positive definite
-        (all LU pivots > 1e-12 of the largest) that factorisation is reused with shift 0,
-        otherwise (rigid-body modes) the shift is -1 % of the Rayleigh quotient of a smooth
-        quadratic bending field, a few times below the first elastic eigenvalue.
+        Shift in (rad/s)^2. Default: a free structure (K annihilates the rigid-body
+        motions, :func:`_unsupported`) gets -1 % of the Rayleigh quotient of a smooth
+        quadratic bending field, a few times below the first elastic eigenvalue;
+        otherwise K is factorised once and, if a solve round trip shows it non-singular,
+        that factorisation is reused with shift 0, else (rigid-body modes of a partly
+        supported structure) the same negative shift is used.
     rigid_tol_hz : float, optional
         Modes below this frequency are rigid-body modes. Default:
         ``|omega2| < max(1e-7 max|omega2|, (2 pi 1e-3 Hz)^2)``; and also a mode whose
@@ -416,7 +520,20 @@ def modal_analysis(
         raise ParameterError(f"n_modes must be an integer, got {n_modes!r}")
     if not 1 <= n_modes < model.n_dof:
         raise ParameterError(f"n_modes must be in 1..{model.n_dof - 1}, got {n_modes}")
-    sol = _lowest_modes(model, int(n_modes), sigma)
+    memo: list[float] = []
+
+    def trial() -> float:  # computed once, and only when needed
+        if not memo:
+            memo.append(_smooth_trial_scale(model))
+        return memo[0]
+
+    if sigma is None and _unsupported(model):
+        # K is singular (rigid-body modes): the negative shift eigsh_lowest would pick
+        # after finding that out by factorising K, without those factorisations
+        q = trial()
+        if np.isfinite(q) and q > 0:
+            sigma = -1e-2 * q
+    sol = _lowest_modes(model, int(n_modes), sigma, trial)
     w2 = sol.omega2
     if rigid_tol_hz is None:
         # relative to the elastic scale: the largest computed eigenvalue or, when every
@@ -425,11 +542,18 @@ def modal_analysis(
         thresh = max(1e-7 * float(np.max(np.abs(w2))) if w2.size else 0.0,
                      (2 * np.pi * 1e-3) ** 2)
         rigid = np.abs(w2) < thresh
-        trial = _smooth_trial_scale(model)
-        if np.isfinite(trial):
+        low = np.abs(w2[~rigid])
+        # the candidates below need |omega2| < 1e-5 q; the minimum over four of the
+        # trial fields bounds q from above, and when no mode is below 1e-5 of that
+        # bound, none is a candidate and q is not needed (clamped structures)
+        if low.size and (memo or low.min() < 1e-5 * _trial_scale_bound(model)):
+            trial_q = trial()
+        else:
+            trial_q = np.inf
+        if np.isfinite(trial_q):
             # a rigid-body shape with an eigenvalue far below the smooth-field estimate
             # of the first elastic one is rigid too
-            cand = ~rigid & (np.abs(w2) < 1e-5 * trial)
+            cand = ~rigid & (np.abs(w2) < 1e-5 * trial_q)
             if np.any(cand):
                 cand[cand] = _rigid_residual(model, sol.vectors[:, cand]) < 1e-4
                 rigid |= cand

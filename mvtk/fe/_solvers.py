@@ -381,16 +381,18 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     if A.nnz == 0 or np.all(A.data != 0):
         return A
     n = A.shape[0]
-    # groups of consecutive columns with the same stored pattern, by a hash of the
-    # pattern (a collision can only merge two groups, which keeps more entries: the
-    # entries dropped below are zero whatever the grouping)
+    # groups of consecutive columns with the same stored pattern, told by its length
+    # and its first and last row (columns of different patterns with the same three
+    # can only merge two groups, which keeps more entries: the entries dropped below
+    # are zero whatever the grouping)
     length = np.diff(A.indptr)
-    w = np.random.default_rng(20261202).integers(1, 2**62, size=n, dtype=np.int64)
-    h = np.zeros(n, dtype=np.int64)
     nzc = length > 0
-    with np.errstate(over="ignore"):
-        h[nzc] = np.add.reduceat(w[A.indices], A.indptr[:-1][nzc])
-    new = np.r_[True, (length[1:] != length[:-1]) | (h[1:] != h[:-1])]
+    lo = np.full(n, -1, dtype=np.int64)
+    hi = np.full(n, -1, dtype=np.int64)
+    lo[nzc] = A.indices[A.indptr[:-1][nzc]]
+    hi[nzc] = A.indices[A.indptr[1:][nzc] - 1]
+    new = np.r_[True, (length[1:] != length[:-1]) | (lo[1:] != lo[:-1])
+                | (hi[1:] != hi[:-1])]
     group = np.cumsum(new) - 1
     first = np.flatnonzero(new)[group]             # first column of each column's group
     size = np.bincount(group)[group]
@@ -399,18 +401,19 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     nk = len(kinds)
     if nk < 2:
         return A
-    kind = kind.ravel().astype(np.int32)
-    # kind pairs linked by a nonzero entry (rows and columns of the nonzeros only)
-    nz = np.flatnonzero(A.data)
-    col = np.repeat(kind, length)
-    link = np.bincount(kind[A.indices[nz]].astype(np.int64) * nk + col[nz],
-                       minlength=nk * nk).reshape(nk, nk) > 0
+    kind = kind.ravel().astype(np.int32 if nk * nk < 2**31 else np.int64)
+    # the kind pair (row kind, column kind) of every entry
+    pair = kind[A.indices]
+    pair *= nk
+    pair += np.repeat(kind, length)
+    # kind pairs linked by a nonzero entry
+    link = np.bincount(pair[A.data != 0], minlength=nk * nk).reshape(nk, nk) > 0
     _, comp = sp.csgraph.connected_components(sp.csr_matrix(link | link.T),
                                               directed=False)
-    ck = comp[kind]
-    keep = ck[A.indices] == np.repeat(ck, length)
-    if np.all(keep):
+    same = (comp[:, None] == comp[None, :]).ravel()
+    if np.all(same):
         return A
+    keep = same[pair]
     take = np.flatnonzero(keep)
     # entries kept before each column's start: the new column pointers
     indptr = np.searchsorted(take, A.indptr)
@@ -484,12 +487,24 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
                 f"environment variable MVTK_SPARSE_BACKEND must be one of {BACKENDS}, "
                 f"got {env!r}")
         backend = env
-    A = sp.csc_matrix(A)
-    if A.shape[0] != A.shape[1]:
-        raise DimensionError(f"matrix must be square, got {A.shape}")
-    if not A.has_sorted_indices:
-        A = A.sorted_indices()
-    A = _drop_uncoupled(A)
+    if sp.issparse(A) and A.format == "csr":
+        # the stored zeros are dropped first (on the transpose's CSC arrays, the same
+        # as A's CSR arrays: no copy), so that only the kept entries are transposed
+        if A.shape[0] != A.shape[1]:
+            raise DimensionError(f"matrix must be square, got {A.shape}")
+        At = A.T
+        if not At.has_sorted_indices:
+            At = At.sorted_indices()
+        A = _drop_uncoupled(At).T.tocsc()
+        if not A.has_sorted_indices:
+            A = A.sorted_indices()
+    else:
+        A = sp.csc_matrix(A)
+        if A.shape[0] != A.shape[1]:
+            raise DimensionError(f"matrix must be square, got {A.shape}")
+        if not A.has_sorted_indices:
+            A = A.sorted_indices()
+        A = _drop_uncoupled(A)
     chol = _cholmod_module() if backend in ("auto", "cholmod") else None
     if backend == "cholmod" and chol is None:
         raise MissingDependencyError(
