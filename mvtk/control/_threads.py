@@ -3,8 +3,7 @@
 Riccati solves (QZ), matrix exponentials and the blocked time march work on matrices of a
 few hundred rows. On such sizes a second BLAS thread buys nothing and, on a loaded
 machine, costs several times the single-thread time (threads waiting for a core).
-:func:`small_dense` limits BLAS to one thread with :mod:`threadpoolctl` when it is
-installed (``pip install "mvtk[control]"``) and is a no-op otherwise.
+:func:`small_dense` limits BLAS to one thread (:func:`mvtk._blas.blas_limits`).
 """
 
 from __future__ import annotations
@@ -19,14 +18,13 @@ SMALL_ORDER = 1000
 
 
 def small_dense(order: int):
-    """Context manager: one BLAS thread for a dense problem of ``order`` rows."""
+    """Context manager: one BLAS thread for a dense problem of ``order`` rows
+    (:func:`mvtk._blas.blas_limits`)."""
     if order > SMALL_ORDER:
         return contextlib.nullcontext()
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+    from .._blas import blas_limits
+
+    return blas_limits()
 
 
 def one_blas_thread(fn):

@@ -38,6 +38,7 @@ import scipy.sparse as sp
 import scipy.sparse.csgraph  # noqa: F401  (sp.csgraph)
 import scipy.sparse.linalg as spla
 
+from .._blas import blas_limits as _blas_limits
 from ..errors import ConvergenceError, DimensionError, MissingDependencyError, ParameterError
 from ._block_eigen import block_lanczos
 
@@ -53,8 +54,6 @@ __all__ = [
 ]
 
 BACKENDS = ("auto", "superlu", "cholmod")
-#: BLAS threads used inside factorisations and eigen solves (None: leave as is).
-BLAS_THREADS: int | None = 1
 #: Block width of the block Lanczos method of :func:`eigsh_lowest` (the default method).
 #: Measured on the 49 140-DOF plate (CHOLMOD, simplicial solves, iteration only, CPU,
 #: load 4-5): 10 modes, ARPACK 34 solves 0.99-1.12 s; blocks of 1, 2, 3, 4: 27, 36, 45,
@@ -87,38 +86,6 @@ _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
 _ORDER_CACHE_SIZE = 8
 
 
-_CONTROLLER = None
-_LIMIT_DEPTH = 0
-
-
-class _BlasLimits:
-    """Limit BLAS threads to :data:`BLAS_THREADS` (re-entrant; the library scan of
-    threadpoolctl, ~30 ms, is made once per process and refreshed only when new BLAS
-    libraries appear)."""
-
-    def __enter__(self):
-        global _CONTROLLER, _LIMIT_DEPTH
-        self._limit = None
-        if BLAS_THREADS is not None and _LIMIT_DEPTH == 0:
-            from threadpoolctl import ThreadpoolController
-
-            if _CONTROLLER is None:
-                _CONTROLLER = ThreadpoolController()
-            self._limit = _CONTROLLER.limit(limits=BLAS_THREADS, user_api="blas")
-        _LIMIT_DEPTH += 1
-        return self
-
-    def __exit__(self, *exc):
-        global _LIMIT_DEPTH
-        _LIMIT_DEPTH -= 1
-        if self._limit is not None:
-            self._limit.restore_original_limits()
-        return False
-
-
-def _blas_limits() -> _BlasLimits:
-    """Context manager limiting BLAS threads to :data:`BLAS_THREADS`."""
-    return _BlasLimits()
 
 
 def _cholmod_module():
@@ -720,7 +687,7 @@ def eigsh_lowest(
     One factorisation of ``K - sigma M`` is made and used by a shift-invert Lanczos
     (by default the block Lanczos of :mod:`mvtk.fe._block_eigen`, or ARPACK's
     ``scipy.sparse.linalg.eigsh`` with ``OPinv``), with a deterministic start and
-    BLAS threads limited to :data:`BLAS_THREADS`. For free-free structures pass a
+    BLAS threads limited to :data:`mvtk._blas.BLAS_THREADS`. For free-free structures pass a
     negative ``sigma`` (default: a small negative shift scaled to the problem, so
     rigid-body modes are found too).
 

@@ -36,12 +36,6 @@ def _correlations(y, yr, nlag):
 _MAX_TOEPLITZ_ROWS = 2000
 
 
-def _blas_limits():
-    from ..fe._solvers import _blas_limits as limits
-
-    return limits()
-
-
 def _decimate(y, fs, fmax):
     """``y`` decimated to the lowest rate with ``fmax`` below 0.4 x the new rate."""
     import scipy.signal
@@ -239,7 +233,9 @@ def ssi_cov(
     # one BLAS thread: the SVD and the per-order solves are 4-100x slower with a
     # second OpenBLAS thread on a loaded 2-core machine (measured: a 1236-row SVD
     # 12 s against 2.7 s)
-    with _blas_limits():
+    from .._blas import blas_limits
+
+    with blas_limits():
         R = _correlations(y, yr, 2 * i + 1)                     # (2i+1, nl, nr)
         a = np.arange(i)
         k = i + a[:, None] - a[None, :]                          # lag index R_{i+a-b}

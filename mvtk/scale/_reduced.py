@@ -332,8 +332,8 @@ class ReducedBasis:
     """
 
     def __init__(self, dec: Decomposition, n_modes: int):
+        from .._blas import blas_limits as _blas_limits
         from ..fe import eigsh_lowest, factorize
-        from ..fe._solvers import _blas_limits
 
         self.dec = dec
         self.n_modes = n_modes
@@ -387,7 +387,7 @@ class ReducedBasis:
     def solve(self, p: np.ndarray, tol: float):
         """``(fn_hz, bound, path)`` of one sample, or ``(None, bound, reason)`` when the
         reduced path cannot give it within ``tol`` (then it is solved in full)."""
-        from ..fe._solvers import _blas_limits
+        from .._blas import blas_limits as _blas_limits
 
         dec = self.dec
         s = (p - dec.p0) / dec.w

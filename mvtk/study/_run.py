@@ -469,7 +469,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
             if name in selected:
                 bar.update(1)
 
-    from ..fe._solvers import _blas_limits
+    from .._blas import blas_limits as _blas_limits
     from . import _ema
     from . import _stages as st
 
