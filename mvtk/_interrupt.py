@@ -11,13 +11,16 @@ Two ways an interrupt gets lost in a long run:
   ("Exception ignored in ..."): a SIGINT that lands there vanishes and the run goes on.
   :func:`interrupt_latch` remembers every SIGINT, and :func:`check_interrupt` raises
   ``KeyboardInterrupt`` again at the next safe point (between pipeline stages, at the end
-  of a command) if one was received.
+  of a command) if one was received. Inside the latch such a dropped interrupt is not
+  printed either (``sys.unraisablehook``): the user sees "interrupted", not a
+  traceback.
 """
 
 from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 import threading
 
 __all__ = ["check_interrupt", "deferred_interrupt", "forget_unhandled_interrupt",
@@ -42,12 +45,24 @@ def interrupt_latch():
         _received.set()
         raise KeyboardInterrupt
 
+    previous_hook = sys.unraisablehook
+
+    def quiet_interrupt(unraisable):
+        # the interrupt Python cannot raise there is remembered, not printed as an
+        # "Exception ignored in ... Traceback" block: check_interrupt raises it
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            _received.set()
+            return
+        previous_hook(unraisable)
+
     previous = signal.signal(signal.SIGINT, handler)
+    sys.unraisablehook = quiet_interrupt
     _received.clear()
     try:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+        sys.unraisablehook = previous_hook
         _received.clear()
 
 
