@@ -59,10 +59,11 @@ def _time_history_like(th, y, fs):
                         name=th.name)
 
 
-def _lowest_peak_hz(y, fs, fmax) -> float:
-    """Frequency (Hz) of the lowest peak that stands out of the record's spectrum (0 if
-    none): :func:`mvtk.signal.find_peaks` on the summed channel amplitude spectra
-    (Welch, segments of 1/8 of the record), lines below 2 line spacings skipped."""
+def _spectral_peaks(y, fs, fmin=None, fmax=None):
+    """``(fn_hz, amplitude, line_spacing_hz)`` of the peaks that stand out of the record's
+    spectrum: :func:`mvtk.signal.find_peaks` on the summed channel amplitude spectra
+    (Welch, segments of 1/8 of the record), lines below 2 line spacings skipped; empty
+    when none."""
     import scipy.signal
 
     from ..errors import MvtkError
@@ -70,12 +71,48 @@ def _lowest_peak_hz(y, fs, fmax) -> float:
 
     nper = 2 ** int(np.floor(np.log2(max(y.shape[1] / 8, 16))))
     f, pxx = scipy.signal.welch(y, fs, nperseg=nper, axis=1)
+    lo = max(2 * fs / nper, 0.0 if fmin is None else float(fmin))
     try:
-        peaks = find_peaks(np.sqrt(pxx), f, power=False, fmin=2 * fs / nper, fmax=fmax)
+        peaks = find_peaks(np.sqrt(pxx), f, power=False, fmin=lo, fmax=fmax)
     except MvtkError:
-        return 0.0
-    fn = np.asarray(peaks.fn_hz, dtype=float)
+        return np.zeros(0), np.zeros(0), fs / nper
+    return (np.asarray(peaks.fn_hz, dtype=float), np.asarray(peaks.amplitude, dtype=float),
+            fs / nper)
+
+
+def _lowest_peak_hz(y, fs, fmax) -> float:
+    """Frequency (Hz) of the lowest peak of :func:`_spectral_peaks` (0 if none)."""
+    fn = _spectral_peaks(y, fs, fmax=fmax)[0]
     return float(fn.min()) if fn.size else 0.0
+
+
+def _warn_unselected_peaks(y, fs, band, fn_sel, kurt_of):
+    """AccuracyWarning naming the record's strongest spectral peaks (at least half the
+    largest amplitude) that no selected mode explains (none within 1 % or 2 lines)."""
+    import warnings
+
+    from ..errors import AccuracyWarning
+
+    f, amp, df = _spectral_peaks(y, fs, band[0], band[1])
+    if not f.size:
+        return
+    strong = f[amp >= 0.5 * amp.max()]
+    fn_sel = np.asarray(fn_sel, dtype=float)
+    missed = [fp for fp in strong
+              if not np.any(np.abs(fn_sel - fp) <= max(0.01 * fp, 2 * df))]
+    if not missed:
+        return
+    kurt = kurt_of(np.asarray(missed))
+    what = "; ".join(
+        f"{fp:.4g} Hz" + (f" (band kurtosis {k:.2f}: a harmonic)" if k < 2.0 else
+                          f" (band kurtosis {k:.2f})" if np.isfinite(k) else "")
+        for fp, k in zip(missed, kurt))
+    warnings.warn(
+        f"identify_output_only: the record's strongest spectral peak(s) have no selected "
+        f"mode: {what}; their poles do not stabilise (a harmonic, closely spaced lines or "
+        "a mode SSI-cov could not fit): check them with fn_hz=[...]",
+        AccuracyWarning, stacklevel=3,
+    )
 
 
 def _warn_power_below(y, lo, hi, i, fs):
@@ -318,7 +355,12 @@ def identify_output_only(
     mpd_v = mpd(cplx) if len(names) > 1 else np.full(nm, np.nan)
     from ._harmonics import HARMONIC_KURTOSIS, band_kurtosis
 
-    kurt = band_kurtosis(th.values, signal.sampling_rate(th), fn, zeta)
+    fs = signal.sampling_rate(th)
+    kurt = band_kurtosis(th.values, fs, fn, zeta)
+    if fn_hz is None:
+        y = th.values.astype(float)
+        _warn_unselected_peaks(y, fs, diagram.band_hz, fn,
+                               lambda f: band_kurtosis(y, fs, f, np.full(f.size, 0.0025)))
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
                                      diagram.band_hz, stab.zeta_max, kurtosis=kurt,
                                      max_harmonic_kurtosis=HARMONIC_KURTOSIS)

@@ -13,7 +13,7 @@ import pytest
 import scipy.ndimage
 
 from mvtk import io, modal
-from mvtk.errors import ParameterError, ResolutionWarning
+from mvtk.errors import AccuracyWarning, ParameterError, ResolutionWarning
 
 FS_HIGH = 6400.0
 
@@ -168,3 +168,27 @@ def test_a_harmonic_is_told_from_the_modes_by_its_kurtosis(msys):
     assert np.all((res.kurtosis[j] > 2.5) & (res.kurtosis[j] < 3.5)), res.kurtosis[j]
     assert res.reliable[j].all(), [res.reason[k] for k in j]
     assert "kurtosis" in res.to_dataframe().columns
+
+
+def test_a_strong_peak_without_a_mode_is_named(msys):
+    # a constant-speed 55 Hz sinusoid: SSI-cov's poles there have zeta ~ 0 and do not
+    # stabilise, so no mode is selected -- and the warning says what was left out
+    th, fn, _ = _ambient(msys, 400.0, 2**16)
+    t = np.arange(th.sizes["time"]) / 400.0
+    y = th.values + 0.8 * th.values.std(axis=1, keepdims=True) * np.sin(2 * np.pi * 55.0 * t)
+    with pytest.warns(AccuracyWarning, match=r"no selected mode: 55(\.\d+)? Hz \(band "
+                      r"kurtosis 1\.[4-7]\d*: a harmonic\)"):
+        res = modal.identify_output_only(th.copy(data=y), 2, 150, orders=range(2, 41, 2))
+    assert np.all(np.abs(res.fn_hz - 55.0) > 0.5)
+
+
+@pytest.mark.shared_data
+def test_operational_record_names_its_unselected_harmonic(shared_data):
+    # MPSTD_Set001: four accelerometers at 3200 Hz; the strongest lines, 181.7 and
+    # 182.8 Hz, are not modes SSI-cov can stabilise; the first is a clean sinusoid
+    src = shared_data / "uff" / "MPSTD_Set001_2024_10_08_10_27_07.uff"
+    if not src.is_file():
+        pytest.skip(f"{src} not found")
+    th = io.read(src)["time_history"]
+    with pytest.warns(AccuracyWarning, match=r"181\.\d Hz \(band kurtosis 1\.\d+: a harmonic\)"):
+        modal.identify_output_only(th)
