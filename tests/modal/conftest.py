@@ -74,6 +74,26 @@ def match(found_fn, true_fn):
     return np.array([int(np.argmin(np.abs(found_fn - f))) for f in true_fn])
 
 
+def ambient(fs, n=2**16, noise=0.05, seed=3):
+    """Displacements of the 5-DOF :func:`chain` under white-noise forces on every DOF
+    (FFT filtering of one long record by the exact receptance) plus ``noise`` x RMS
+    sensor noise: ``(time history, fn_hz, zeta, complex shapes)``."""
+    from mvtk import io, modal
+
+    M, C, K = chain(5)
+    rng = np.random.default_rng(seed)
+    f = np.fft.rfftfreq(n, 1 / fs)
+    H = modal.exact_frf(M, C, K, f, range(5), range(5)).values
+    F = np.fft.rfft(rng.standard_normal((5, n)), axis=1)
+    y = np.fft.irfft(np.einsum("oif,if->of", H, F), n, axis=1)
+    y += noise * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
+    th = io.time_history(y, fs, [f"a{k}" for k in range(1, 6)], "m", "displacement",
+                         node=[1, 2, 3, 4, 5], direction="z")
+    lam, psi = modal.exact_modes(M, C, K)
+    return th, np.abs(lam) / 2 / np.pi, -lam.real / np.abs(lam), psi
+
+
 @pytest.fixture(scope="session")
 def msys():
-    return SimpleNamespace(chain=chain, modal_frf=modal_frf, add_noise=add_noise, match=match)
+    return SimpleNamespace(chain=chain, modal_frf=modal_frf, add_noise=add_noise, match=match,
+                           ambient=ambient)

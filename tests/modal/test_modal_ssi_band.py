@@ -18,24 +18,17 @@ from mvtk.errors import AccuracyWarning, ParameterError, ResolutionWarning
 FS_HIGH = 6400.0
 
 
-def _ambient(msys, fs, n, seed=3):
-    """Displacements of a 5-DOF chain under white-noise forces on every DOF, 5 % noise."""
-    M, C, K = msys.chain(5)
-    rng = np.random.default_rng(seed)
-    f = np.fft.rfftfreq(n, 1 / fs)
-    H = modal.exact_frf(M, C, K, f, range(5), range(5)).values
-    F = np.fft.rfft(rng.standard_normal((5, n)), axis=1)
-    y = np.fft.irfft(np.einsum("oif,if->of", H, F), n, axis=1)
-    y += 0.05 * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
-    th = io.time_history(y, fs, [f"a{k}" for k in range(1, 6)], "m", "displacement",
-                         node=[1, 2, 3, 4, 5], direction="z")
-    lam, _ = modal.exact_modes(M, C, K)
-    return th, np.abs(lam) / 2 / np.pi, -lam.real / np.abs(lam)
+def _shared_record(shared_data, relative):
+    """The time history of a file of ../shared/data (the test is skipped without it)."""
+    src = shared_data / relative
+    if not src.is_file():
+        pytest.skip(f"{src} not found")
+    return io.read(src)["time_history"]
 
 
 @pytest.fixture(scope="module")
 def oversampled(msys):
-    return _ambient(msys, FS_HIGH, 2**19)
+    return msys.ambient(FS_HIGH, 2**19)[:3]
 
 
 def test_block_rows_set_the_band_and_warn_about_what_lies_below(oversampled):
@@ -93,10 +86,7 @@ def test_one_channel_has_no_shape_indicators(oversampled):
 def test_ambient_microphone_record_states_what_it_cannot_see(shared_data):
     # Sample_UFF58_ascii.uff: 1.2 s of room sound at 65536 Hz, one microphone; about half
     # its power lies in lines at 24-42 Hz (largest at 32 Hz)
-    src = shared_data / "uff" / "Sample_UFF58_ascii.uff"
-    if not src.is_file():
-        pytest.skip(f"{src} not found")
-    th = io.read(src)["time_history"]
+    th = _shared_record(shared_data, "uff/Sample_UFF58_ascii.uff")
     # 61 block rows (the model orders' minimum) see only >= 537 Hz, and say so
     with pytest.warns(ResolutionWarning, match=r"peak there: 3[0-4](\.\d+)? Hz"):
         res = modal.identify_output_only(th, n_lags=61)
@@ -122,10 +112,7 @@ def test_wind_turbine_tower_against_pyoma2(shared_data):
     from pyoma2.algorithms import SSI
     from pyoma2.setup import SingleSetup
 
-    src = shared_data / "tdms" / "good_tdms_1.tdms"
-    if not src.is_file():
-        pytest.skip(f"{src} not found")
-    th = io.read(src)["time_history"]
+    th = _shared_record(shared_data, "tdms/good_tdms_1.tdms")
     res = modal.identify_output_only(th)
     assert res.diagram.band_hz[0] == pytest.approx(30.0 / (2 * 45))
     ok = res.reliable
@@ -152,7 +139,7 @@ def test_a_harmonic_is_told_from_the_modes_by_its_kurtosis(msys):
     # the chain's ambient response at 400 Hz plus a harmonic of a machine running at
     # 55 Hz whose speed wanders by about 0.3 % (a slow random walk of the frequency),
     # carrying about a quarter of the response's variance
-    th, fn, _ = _ambient(msys, 400.0, 2**16)
+    th, fn, _, _ = msys.ambient(400.0, 2**16)
     rng = np.random.default_rng(7)
     walk = np.cumsum(rng.standard_normal(th.sizes["time"]))
     walk = scipy.ndimage.gaussian_filter1d(walk, 2000.0)
@@ -173,7 +160,7 @@ def test_a_harmonic_is_told_from_the_modes_by_its_kurtosis(msys):
 def test_a_strong_peak_without_a_mode_is_named(msys):
     # a constant-speed 55 Hz sinusoid: SSI-cov's poles there have zeta ~ 0 and do not
     # stabilise, so no mode is selected -- and the warning says what was left out
-    th, fn, _ = _ambient(msys, 400.0, 2**16)
+    th, fn, _, _ = msys.ambient(400.0, 2**16)
     t = np.arange(th.sizes["time"]) / 400.0
     y = th.values + 0.8 * th.values.std(axis=1, keepdims=True) * np.sin(2 * np.pi * 55.0 * t)
     with pytest.warns(AccuracyWarning, match=r"no selected mode: 55(\.\d+)? Hz \(band "
@@ -186,9 +173,6 @@ def test_a_strong_peak_without_a_mode_is_named(msys):
 def test_operational_record_names_its_unselected_harmonic(shared_data):
     # MPSTD_Set001: four accelerometers at 3200 Hz; the strongest lines, 181.7 and
     # 182.8 Hz, are not modes SSI-cov can stabilise; the first is a clean sinusoid
-    src = shared_data / "uff" / "MPSTD_Set001_2024_10_08_10_27_07.uff"
-    if not src.is_file():
-        pytest.skip(f"{src} not found")
-    th = io.read(src)["time_history"]
+    th = _shared_record(shared_data, "uff/MPSTD_Set001_2024_10_08_10_27_07.uff")
     with pytest.warns(AccuracyWarning, match=r"181\.\d Hz \(band kurtosis 1\.\d+: a harmonic\)"):
         modal.identify_output_only(th)

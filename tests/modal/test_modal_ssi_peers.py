@@ -9,30 +9,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mvtk import io, modal
+from mvtk import modal
 from mvtk.errors import ParameterError
 
 FS = 400.0
 
 
-def _ambient(msys, n=2**16, noise=0.05, seed=3):
-    """Displacements of a 5-DOF chain under white-noise forces on every DOF (FFT
-    filtering of one long record by the exact receptance), plus 5 % sensor noise."""
-    M, C, K = msys.chain(5)
-    rng = np.random.default_rng(seed)
-    f = np.fft.rfftfreq(n, 1 / FS)
-    H = modal.exact_frf(M, C, K, f, range(5), range(5)).values
-    F = np.fft.rfft(rng.standard_normal((5, n)), axis=1)
-    y = np.fft.irfft(np.einsum("oif,if->of", H, F), n, axis=1)
-    y += noise * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
-    th = io.time_history(y, FS, [f"a{k}" for k in range(1, 6)], "m", "displacement",
-                         node=[1, 2, 3, 4, 5], direction="z")
-    lam, psi = modal.exact_modes(M, C, K)
-    return th, np.abs(lam) / 2 / np.pi, -lam.real / np.abs(lam), psi
-
-
 def test_ssi_cov_recovers_modes(msys):
-    th, fn, z, psi = _ambient(msys)
+    th, fn, z, psi = msys.ambient(FS)
     res = modal.identify_output_only(th, 2, 150, orders=range(2, 41, 2))
     assert res.method == "SSI-cov" and res.n_modes == 5
     j = msys.match(res.fn_hz, fn)
@@ -55,7 +39,7 @@ def test_ssi_cov_against_pyoma2(msys):
     from pyoma2.algorithms import SSI
     from pyoma2.setup import SingleSetup
 
-    th, fn, z, psi = _ambient(msys)
+    th, fn, z, psi = msys.ambient(FS)
     ours = modal.identify_output_only(th, 2, 150, orders=range(2, 41, 2), n_lags=20)
     setup = SingleSetup(th.values.T.copy(), fs=FS)
     alg = SSI(name="ssicov", method="cov", br=20, ordmax=40)
