@@ -68,7 +68,20 @@ def test_generator_reproduces_the_committed_files(tmp_path):
     gen.main(tmp_path)
     for name in ("SYNTHETIC_smart_beam_impact.csv", "SYNTHETIC_smart_beam_decay.csv",
                  "SYNTHETIC_smart_beam_broadband.csv"):
-        assert (tmp_path / name).read_bytes() == (DATA / name).read_bytes(), name
+        new_text = (tmp_path / name).read_text().splitlines()
+        old_text = (DATA / name).read_text().splitlines()
+        assert len(new_text) == len(old_text), name
+        # the header (SYNTHETIC label, columns) byte for byte; the numbers, printed to 6
+        # significant digits, may flip in their last digit where a value lies on a
+        # rounding boundary and another numpy/scipy build rounds the other way
+        head = [i for i, line in enumerate(old_text) if not line[:1].isdigit()
+                and not line.startswith("-")]
+        assert [new_text[i] for i in head] == [old_text[i] for i in head], name
+        changed = sum(a != b for a, b in zip(new_text, old_text))
+        assert changed <= max(3, len(old_text) // 10000), (name, changed)
+        a = pd.read_csv(tmp_path / name, comment="#").to_numpy(float)
+        b = pd.read_csv(DATA / name, comment="#").to_numpy(float)
+        np.testing.assert_allclose(a, b, rtol=1e-5, atol=0, err_msg=name)
     assert (DATA / "SYNTHETIC_smart_beam_broadband.csv").stat().st_size < 2e6
     # 6.5 MB with the scan test's FRFs (13 points x 3201 lines, complex, + coherence)
     assert sum(p.stat().st_size for p in DATA.glob("SYNTHETIC_*")) < 7e6

@@ -60,11 +60,16 @@ def test_reduced_path_reaches_the_full_path_optimum(beam):
     assert full.meta["reduced_basis"] == {"used": False}
     rb = red.meta["reduced_basis"]
     assert rb["used"] and rb["rounds"] >= 1 and rb["fallback"] is None
-    # the full path stops when trust-region steps no longer lower a cost whose eigen
-    # round-off is ~1e-12: both end points agree to 1e-6 (measured 1.2e-8 and 1.3e-7)
-    np.testing.assert_allclose(red.values, full.values, rtol=1e-6)
-    np.testing.assert_allclose(red.fn_hz, full.fn_hz, rtol=1e-7)
-    np.testing.assert_allclose(red.sensitivity, full.sensitivity, rtol=1e-5)
+    # both paths stop on the same least-squares optimum: equal costs, and end points
+    # apart by a negligible fraction of the parameters' standard deviations (E and the
+    # clamp stiffness are correlated, so the cost is flat along one direction: the
+    # trust-region steps stop anywhere in a 1e-4-sigma neighbourhood, measured 1.3e-4
+    # sigma with scipy 1.17, 1e-6 sigma with 1.16)
+    assert red.cost == pytest.approx(full.cost, rel=1e-7)
+    assert np.all(np.abs(red.values - full.values) <= 1e-3 * full.std)
+    np.testing.assert_allclose(red.fn_hz, full.fn_hz, rtol=1e-5)
+    # evaluated at those two points (2.8e-5 apart in the clamp stiffness)
+    np.testing.assert_allclose(red.sensitivity, full.sensitivity, rtol=1e-4)
     np.testing.assert_allclose(red.std, full.std, rtol=1e-4)
     # one full eigen solve at the start and one per round, against one per evaluation
     assert red.timing["n_eigen"] == 1 + rb["rounds"] == 1 + rb["n_full_eigen"]
