@@ -23,6 +23,8 @@ report: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check mvtk tests benchmarks data docs
+	# the package floors of docs/architecture.md (pyproject.toml [tool.importlinter])
+	$(BIN)/lint-imports --no-cache
 
 test: $(STAMP) lint
 	$(BIN)/python -m pytest

@@ -9,7 +9,7 @@ from mvtk.errors import AccuracyWarning
 
 
 def test_escaping_warning_is_one_plain_line(monkeypatch, capsys):
-    import mvtk.fe._cli as fe_cli
+    import mvtk.cli.modes as fe_cli
 
     def run(args):
         warnings.warn("half_power: |H| deviates by 8.3 %\nfrom a single-mode curve",

@@ -73,7 +73,7 @@ def test_interrupt_inside_exec_code_still_exits_130(tmp_path):
     (tmp_path / "ki_probe.py").write_text(textwrap.dedent("""
         import sys
         import mvtk.cli as cli
-        import mvtk.fe._cli as fe_cli
+        import mvtk.cli.modes as fe_cli
 
         def interrupted_in_exec(args):
             exec("import os, signal\\nos.kill(os.getpid(), signal.SIGINT)\\n"

@@ -86,7 +86,7 @@ class ComparisonResult:
         return pd.DataFrame(list(self.rows)).set_index("controller")
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption="Controller comparison",
                           passed_column=None)

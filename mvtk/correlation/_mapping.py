@@ -134,7 +134,7 @@ class DofMapping:
         return self.report
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.report, caption=type(self).__name__, passed_column=None)
 

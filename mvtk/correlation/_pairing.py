@@ -42,7 +42,7 @@ class ModePairing:
         return self.table
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.table, caption=type(self).__name__, passed_column=None)
 

@@ -90,7 +90,7 @@ class HalfPowerResult:
     coherence: np.ndarray
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 

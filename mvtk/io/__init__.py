@@ -75,7 +75,7 @@ Formats and their options
 Command line
 ------------
 ``mvtk read PATH [--format F] [--set key=value ...] [-o out.nc]`` prints the layout of
-a file and optionally converts it to netCDF (:mod:`mvtk.io._cli`).
+a file and optionally converts it to netCDF (:mod:`mvtk.cli.read`).
 
 Errors
 ------

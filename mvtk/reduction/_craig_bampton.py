@@ -159,7 +159,7 @@ class SuperElement:
         return self.T @ q
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 

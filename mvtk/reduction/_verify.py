@@ -103,7 +103,7 @@ class ModeComparison:
         return np.max(self.mac_matrix, axis=1)
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
@@ -197,7 +197,7 @@ class StaticCheck:
         return float(both.max()) if both.size else 0.0
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
@@ -281,7 +281,7 @@ class SizeTable:
     se_dof_6_per_node: int
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 
@@ -325,7 +325,7 @@ class Verification:
     static: StaticCheck
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return html_table(self.to_dataframe(), caption=type(self).__name__, passed_column=None)
 

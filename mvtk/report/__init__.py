@@ -4,8 +4,9 @@ Numbers in tables are formatted by quantity (:func:`infer_format`); :func:`html_
 gives result objects a notebook ``_repr_html_`` with the same formatting.
 """
 
-from ._format import ColumnFormat, dict_table, format_number, format_table, infer_format
-from ._html import TABLE_CSS, Report, Section, html_table, render_table, tolerance_used
+from .._format import ColumnFormat, dict_table, format_number, format_table, infer_format
+from .._table import TABLE_CSS, html_table, render_table
+from ._html import Report, Section, tolerance_used
 from ._pdf import PdfExportError, find_chromium, to_pdf
 from ._provenance import Provenance, collect_provenance, file_sha256
 

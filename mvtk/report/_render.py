@@ -183,9 +183,9 @@ def _worker(conn, jobs, order, counter, parent_pid) -> None:
     import signal
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)   # Ctrl-C: the parent ends this process
-    from ..study._run import _die_with_parent
+    from .._process import die_with_parent
 
-    _die_with_parent()
+    die_with_parent()
     if os.getppid() != parent_pid:   # the parent died before prctl took effect
         os._exit(1)
     out = []

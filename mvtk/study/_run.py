@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from .._interrupt import check_interrupt
+from .._process import die_with_parent
 from ..errors import ConfigError, MvtkError
 from ._cache import OutputLock, ReadTracker, StageCache, TrackedStudy, code_hash, stage_key
 from ._config import Study, load_study
@@ -270,16 +271,6 @@ class _ChildError(Exception):
         self.message = message
 
 
-def _die_with_parent() -> None:
-    """Ask Linux to SIGKILL this process when its parent dies (best effort elsewhere)."""
-    import ctypes
-    import signal
-
-    with contextlib.suppress(OSError, AttributeError):
-        libc = ctypes.CDLL(None, use_errno=True)
-        libc.prctl(1, int(signal.SIGKILL))   # PR_SET_PDEATHSIG
-
-
 def _child_main(conn, compute, study, parent_pid, close_fds) -> None:
     """Worker process: run ``compute`` on a fresh tracker and send its outcome.
 
@@ -294,7 +285,7 @@ def _child_main(conn, compute, study, parent_pid, close_fds) -> None:
 
     # Ctrl-C goes to the main process, which ends this one
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    _die_with_parent()
+    die_with_parent()
     if os.getppid() != parent_pid:   # the parent died before prctl took effect
         os._exit(1)
     for fd in close_fds:

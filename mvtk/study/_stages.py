@@ -327,7 +327,7 @@ def updating(study: Study, modal_arrays=None):
     shape nearest in frequency, so the FE modes are paired by MAC.
     """
     from ..updating import FrequencyTarget, Parameter, update
-    from ..updating._cli import _builder, _create_missing
+    from ._updating import create_missing, import_builder
 
     cfg = study.section("updating")
     desc = study.description()
@@ -337,7 +337,7 @@ def updating(study: Study, modal_arrays=None):
         if p.get("initial") is not None:
             # a field absent from the nominal description (e.g. an elastic clamp) starts
             # at the configured value
-            _create_missing(desc, p["path"], p["initial"], where)
+            create_missing(desc, p["path"], p["initial"], where)
         params.append(Parameter.from_dict({k: v for k, v in p.items() if v is not None},
                                           where))
     if cfg.get("targets_hz") is not None:
@@ -356,7 +356,7 @@ def updating(study: Study, modal_arrays=None):
     kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
               if cfg.get(k) is not None}
     if cfg.get("builder") is not None:
-        kwargs["builder"] = _builder(cfg["builder"])
+        kwargs["builder"] = import_builder(cfg["builder"])
     else:
         kwargs["affine"] = _affine_parameters(desc, [p.path for p in params])
     with warnings.catch_warnings(record=True) as caught:

@@ -822,7 +822,7 @@ class UpdateResult:
         return tables[table]()
 
     def _repr_html_(self) -> str:
-        from ..report import html_table
+        from .._table import html_table
 
         return (html_table(self.residual_table(), caption="Residuals", passed_column=None)
                 + html_table(self.parameter_table(), caption="Parameters",

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
+from mvtk.cli.control import add_parser
 from mvtk.control import (
     PPF,
     SRF,
@@ -24,7 +25,6 @@ from mvtk.control import (
     srf_gain_limit,
     voltage_stats,
 )
-from mvtk.control._cli import add_parser
 from mvtk.control._compare import switching_peak
 from mvtk.control._stability import SUMMARY_COLUMNS
 from mvtk.errors import ConfigError, DimensionError, ParameterError

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from mvtk.damping import _cli
+from mvtk.cli import damping as _cli
 
 BEAM = Path(__file__).resolve().parents[2] / "data" / "smart_beam"
 

@@ -17,7 +17,7 @@ import xarray as xr
 from mvtk import damping as D
 from mvtk import signal as S
 from mvtk import testing as T
-from mvtk.damping import _cli
+from mvtk.cli import damping as _cli
 from mvtk.errors import DimensionError, FormatError
 
 MAT_TH = ["--variable", "Time_chan_1", "Time_chan_2", "--fs", "1280", "--units", "N", "m/s^2",

@@ -17,7 +17,7 @@ import xarray as xr
 from mvtk import damping as D
 from mvtk import signal as S
 from mvtk import testing as T
-from mvtk.damping import _cli
+from mvtk.cli import damping as _cli
 
 io = pytest.importorskip("mvtk.io")
 

@@ -377,7 +377,7 @@ def test_reader_returning_bad_object(tmp_path, monkeypatch):
 def test_cli_read_subcommand(tmp_path, capsys):
     import argparse
 
-    from mvtk.io._cli import add_parser
+    from mvtk.cli.read import add_parser
 
     parser = argparse.ArgumentParser(prog="mvtk")
     add_parser(parser.add_subparsers(dest="command"))

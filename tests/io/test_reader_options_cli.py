@@ -56,7 +56,7 @@ def test_modal_takes_reader_options(shared_data, capsys):
 def test_named_flags_win_over_set(capsys):
     import argparse
 
-    from mvtk.io._cli import add_reader_options, reader_options
+    from mvtk.cli._common import add_reader_options, reader_options
 
     p = argparse.ArgumentParser()
     add_reader_options(p)

@@ -39,7 +39,7 @@ def _near(res, f0, rtol):
 
 @pytest.mark.slow
 def test_free_free_beam_accelerances(modal_data):
-    from mvtk.modal._cli import load_frf
+    from mvtk.cli.modal import load_frf
 
     paths = [modal_data / "uff" / f"meas_point_{k}.txt" for k in (1, 2, 3)]
     h = load_frf(paths, df_hz=1.0, frf_type="accelerance")

@@ -13,8 +13,8 @@ from mvtk.errors import ConfigError
 
 pytest.importorskip("mvtk.fe._structure")
 from mvtk.cli import main  # noqa: E402
+from mvtk.cli.reduce import load_reduction_input  # noqa: E402
 from mvtk.fe import build_model  # noqa: E402
-from mvtk.reduction._cli import load_reduction_input  # noqa: E402
 from mvtk.reduction._config import super_element_from_config  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -131,7 +131,7 @@ def test_read_only_output_folder(tmp_path, capsys):  # pragma: no cover - not ro
 
 
 def test_keyboard_interrupt_is_exit_130(capsys, monkeypatch):
-    import mvtk.fe._cli as fe_cli
+    import mvtk.cli.modes as fe_cli
 
     def interrupted(args):
         raise KeyboardInterrupt

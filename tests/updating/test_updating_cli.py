@@ -15,8 +15,8 @@ from updating_helpers import NOMINAL, model_fn
 
 from mvtk.cli import main
 from mvtk.errors import ConfigError
+from mvtk.study._updating import update_arguments as load_study
 from mvtk.updating import FrequencyTarget, Parameter, update, with_values
-from mvtk.updating._cli import load_study
 
 ROOT = Path(__file__).resolve().parents[2]
 SMART_BEAM = ROOT / "data" / "structures" / "smart_beam.toml"

@@ -1,9 +1,6 @@
-"""``mvtk run STUDY.toml --out DIR``: run a validation study and write its report.
-
-Also the helpers every study command shares: :func:`run_view` (run the stages a
-command needs through the one cached pipeline), :func:`json_document` (the versioned
-JSON output, schemas in ``schemas/``) and the output-path checks done before any work.
-"""
+"""Helpers every command module shares: reader options, output-path checks, the JSON
+document of a command and :func:`run_view` (the stages a command needs, through the one
+cached study pipeline)."""
 
 from __future__ import annotations
 
@@ -15,16 +12,16 @@ import math
 import os
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .errors import ConfigError, MvtkError
+from ..errors import ConfigError, MvtkError
 
-__all__ = ["add_parser", "run_view", "json_document", "json_clean", "check_output_file",
-           "add_cache_argument", "StageError", "SCHEMA_VERSIONS"]
+__all__ = ["run_view", "json_document", "json_clean", "check_output_file",
+           "add_cache_argument", "StageError", "SCHEMA_VERSIONS", "parse_option",
+           "add_reader_options", "reader_options"]
 
 #: Version of the JSON output of each command (``schemas/<command>.schema.json``).
 SCHEMA_VERSIONS = {"run": "mvtk.run/1", "update": "mvtk.update/1", "reduce": "mvtk.reduce/1",
@@ -89,7 +86,7 @@ def add_cache_argument(p: argparse.ArgumentParser) -> None:
                    "--out of `mvtk run`; default: a temporary folder)")
 
 
-def _waiting(message: str) -> None:
+def waiting(message: str) -> None:
     print(f"mvtk: {message}", file=sys.stderr)
 
 
@@ -113,8 +110,8 @@ def run_view(study_path, stages, cache_dir=None, overrides: dict | None = None):
     StageError
         A requested stage failed or could not run; the message says why.
     """
-    from .study import load_study, run
-    from .study._run import check_output_dir
+    from ..study import load_study, run
+    from ..study._run import check_output_dir
 
     study = load_study(study_path)
     if overrides:
@@ -128,7 +125,7 @@ def run_view(study_path, stages, cache_dir=None, overrides: dict | None = None):
         else:
             check_output_dir(cache_dir)
         res = run(study, cache_dir, report=False, progress=False, stages=stages,
-                  on_wait=_waiting)
+                  on_wait=waiting)
     for s in stages:
         if s in res.failed:
             raise StageError(f"stage {s} failed: {res.failed[s]}")
@@ -140,61 +137,79 @@ def run_view(study_path, stages, cache_dir=None, overrides: dict | None = None):
     return res
 
 
-def _run(args: argparse.Namespace) -> int:
-    from .study import run, study_checks
-
-    t0 = time.perf_counter()
-    res = run(args.study, args.out, use_cache=not args.no_cache,
-              progress=None if not args.quiet else False, on_wait=_waiting)
-    dt = time.perf_counter() - t0
-    checks = study_checks(res) if res.results else []
-    failed_checks = [c for c in checks if not c.passed]
-    if args.json:
-        from .validation import check_table
-
-        stages = res.to_dataframe().to_dict(orient="records")
-        table = check_table(checks).to_dict(orient="records") if checks else []
-        sys.stdout.write(json_document("run", args.study, {
-            "report": str(res.report_path) if res.report_path else None,
-            "time_s": dt, "cached_stages": list(res.cache_hits),
-            "stages": stages, "checks": table,
-            "passed": res.ok and not failed_checks}) + "\n")
-    for stage, reason in res.unavailable.items():
-        print(f"mvtk run: stage {stage} not available: {reason}", file=sys.stderr)
-    for stage, reason in res.failed.items():
-        print(f"mvtk run: stage {stage} FAILED: {reason}", file=sys.stderr)
-    for c in failed_checks:
-        print(f"mvtk run: check FAILED: {c.name}: {c.value:.6g} vs {c.reference:.6g} "
-              f"{c.unit}".rstrip(), file=sys.stderr)
-    if res.report_path is not None and not args.json:
-        print(f"report: {res.report_path} ({dt:.1f} s; cached stages: "
-              f"{', '.join(res.cache_hits) or 'none'})")
-    if args.pdf and res.report_path is not None:
-        from .report import to_pdf
-
-        pdf = to_pdf(res.report_path)
-        if not args.json:
-            print(f"pdf: {pdf}")
-    if res.failed:
-        return 2
-    return 1 if failed_checks else 0
+def parse_option(text: str) -> tuple[str, object]:
+    """``"key=value"`` -> (key, value); the value is JSON when it parses, else a string."""
+    key, sep, value = text.partition("=")
+    if not sep or not key:
+        raise argparse.ArgumentTypeError(f"expected key=value, got {text!r}")
+    try:
+        return key, json.loads(value)
+    except json.JSONDecodeError:
+        return key, value
 
 
-def add_parser(subparsers) -> None:
-    """Register ``mvtk run``."""
-    p = subparsers.add_parser(
-        "run", help="run a validation study (TOML) and write the HTML report",
-        description="Run every stage of a study (cached in OUT/cache) and write the HTML "
-        "report. Exit status: 0 all checks passed, 1 a check failed, 2 an error (bad "
-        "input, a failed stage), 130 interrupted.",
-    )
-    p.add_argument("study", help="study TOML file, e.g. data/smart_beam/study.toml")
-    p.add_argument("--out", required=True, help="output folder (index.html, tables/, cache/)")
-    p.add_argument("--no-cache", action="store_true", help="recompute every stage")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--json", action="store_true",
-                   help="print the stage and check tables as JSON (schemas/run.schema.json)")
-    p.add_argument("--pdf", action="store_true",
-                   help="also print the report to DIR/report.pdf with headless Chromium "
-                   "(Debian package chromium)")
-    p.set_defaults(func=_run)
+def add_reader_options(parser: argparse.ArgumentParser) -> None:
+    """Add the reader options group shared by ``mvtk read``, ``damping`` and ``modal``.
+
+    Every option of :func:`mvtk.io.read` is reachable as ``--set KEY=VALUE``; the common
+    ones (the ones a reader's error message asks for when a file does not state them)
+    have their own flags: ``--units``, ``--quantity``, ``--fs`` and ``--variable``
+    (the reader option ``data=``).
+    """
+    rd = parser.add_argument_group("reader options (mvtk.io.read)")
+    rd.add_argument("--format", default=None, help="force a reader (default: detect)")
+    rd.add_argument("--set", action="append", type=parse_option, metavar="KEY=VALUE",
+                    help="reader option, value as JSON or text (repeatable), e.g. "
+                    "--set units='[\"N\", \"m/s^2\"]'")
+    rd.add_argument("--variable", nargs="+", default=None, metavar="NAME",
+                    help="variable(s) of the file holding the data (reader option data=)")
+    rd.add_argument("--units", nargs="+", default=None, metavar="UNIT",
+                    help="units per channel, for files that store none (reader option "
+                    "units=), e.g. --units N m/s^2 V")
+    rd.add_argument("--quantity", nargs="+", default=None, metavar="Q",
+                    help="quantity per channel, e.g. force acceleration (reader option "
+                    "quantity=)")
+    rd.add_argument("--fs", type=float, default=None, metavar="HZ",
+                    help="sampling rate in Hz, for files that store none (reader option fs=)")
+
+
+def reader_options(args: argparse.Namespace) -> dict:
+    """The keyword arguments of :func:`mvtk.io.read` given by :func:`add_reader_options`.
+
+    The named flags win over the same key given with ``--set``; ``format`` is included
+    when given.
+    """
+    opts = dict(args.set or [])
+    for key, val in (("units", args.units), ("quantity", args.quantity), ("fs", args.fs)):
+        if val is not None:
+            opts[key] = val
+    if args.variable is not None:
+        opts["data"] = args.variable[0] if len(args.variable) == 1 else args.variable
+    if args.format is not None:
+        opts["format"] = args.format
+    return opts
+
+
+
+
+def spare_dask_probe() -> None:
+    """Keep xarray from importing dask in a command that never makes a dask array.
+
+    When dask is installed (the ``scale`` extra), xarray imports ``dask.array`` on the
+    first DataArray it builds, to test whether the data is a dask array: 1.2-1.3 s of a
+    2-s ``mvtk read``. ``read``, ``damping`` and ``modal`` hold every array in memory, so
+    they record in xarray's duck-array table that dask arrays are not in use in this
+    process. A no-op when dask is already imported or when xarray's table is not where
+    this xarray version keeps it (the command is then only slower).
+    """
+    if "dask" in sys.modules:
+        return
+    try:
+        from xarray.namedarray import pycompat
+
+        entry = object.__new__(pycompat.DuckArrayModule)
+        entry.module, entry.version, entry.type, entry.available = (
+            None, pycompat.Version("0.0.0"), (), False)
+        pycompat._cached_duck_array_modules.setdefault("dask", entry)
+    except (ImportError, AttributeError, TypeError):  # another xarray layout
+        return

@@ -7,6 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser"]
 
 #: Mesh and FE-deck files that a user may pass by mistake instead of a structure TOML.
@@ -18,7 +20,7 @@ def add_parser(subparsers) -> None:
     """Register the ``modes`` sub-command."""
     p = subparsers.add_parser(
         "modes",
-        help="natural frequencies of a structure TOML",
+        help=COMMANDS["modes"].help,
         description="Build the FE model of a structure description (TOML) and print its "
         "lowest natural frequencies (Hz) with mode types.",
     )
@@ -31,9 +33,9 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk modes``; returns the exit code (errors propagate as MvtkError)."""
+    from ..fe._modal import modal_analysis
+    from ..fe._structure import build_model, resolve_mesh_file
     from ..study._text import read_toml
-    from ._modal import modal_analysis
-    from ._structure import build_model, resolve_mesh_file
 
     path = Path(args.structure)
     if path.suffix.lower() in _MESH_SUFFIXES:

@@ -14,17 +14,18 @@ import sys
 from pathlib import Path
 
 from ..errors import ConfigError
+from ._commands import COMMANDS
 
 __all__ = ["add_parser", "run", "load_reduction_input"]
 
 
 def add_parser(subparsers) -> None:
     """Register the ``reduce`` sub-command."""
-    from .._run_cli import add_cache_argument
+    from ._common import add_cache_argument
 
     p = subparsers.add_parser(
         "reduce",
-        help="Craig-Bampton super element and FE-vs-SE tables of a study TOML",
+        help=COMMANDS["reduce"].help,
         description="Build the FE model of a study (updated when it has [updating]), "
         "reduce it to a Craig-Bampton super element as its [reduction] section says, and "
         "print the size table (nodes, elements, DOF), the FE vs SE eigenfrequencies with "
@@ -60,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
     """Run ``mvtk reduce``; returns the exit code (errors propagate as MvtkError)."""
     import pandas as pd
 
-    from .._run_cli import json_document, run_view
+    from ._common import json_document, run_view
 
     n = args.n_compare
     if n is not None and n < 1:

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from ..errors import ParameterError
+from .errors import ParameterError
 
 __all__ = ["ColumnFormat", "format_number", "infer_format", "format_table", "dict_table"]
 

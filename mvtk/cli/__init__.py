@@ -1,18 +1,12 @@
-"""The ``mvtk`` command line.
+"""The ``mvtk`` command line: one thin module per sub-command.
 
-Each stage contributes its sub-command from a private ``_cli`` module exposing
-``add_parser(subparsers)``:
-
-- ``mvtk read PATH``             (:mod:`mvtk.io`)
-- ``mvtk damping FILE``          (:mod:`mvtk.damping`)
-- ``mvtk modes STRUCTURE.toml``  (:mod:`mvtk.fe`)
-- ``mvtk update STUDY.toml``     (:mod:`mvtk.updating`)
-- ``mvtk reduce STUDY.toml``     (:mod:`mvtk.reduction`)
-- ``mvtk control STUDY.toml``    (:mod:`mvtk.control`)
-- ``mvtk run STUDY.toml --out DIR`` (:mod:`mvtk.study`)
-
-``update``, ``reduce``, ``control`` and ``run`` read the study file through the one
-schema of :mod:`mvtk.study` and run the stages they need through its cached pipeline.
+``mvtk read PATH``, ``damping FILE``, ``modes STRUCTURE.toml``, ``modal FILE``,
+``correlate``, ``init DIR``, ``run STUDY.toml --out DIR``, ``update``, ``reduce``,
+``control`` and ``report DIR`` (the table :data:`mvtk.cli._commands.COMMANDS`). Each
+module parses its arguments and calls the library or the study pipeline; ``update``,
+``reduce``, ``control`` and ``run`` read the study file through the one schema of
+:mod:`mvtk.study` and run the stages they need through its cached pipeline. A command's
+module is imported only when that command runs, so ``mvtk --help`` starts at once.
 
 Exit status of every command: 0 success; 1 a check failed (``run``) or the update did
 not converge (``update``); 2 an error, reported as one line naming the file, key or
@@ -25,41 +19,48 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
-import importlib.util
 import os
 import sys
 import warnings
 
-from . import __version__
-from ._interrupt import check_interrupt, forget_unhandled_interrupt, interrupt_latch
-from .errors import MvtkError
+from .. import __version__
+from .._interrupt import check_interrupt, forget_unhandled_interrupt, interrupt_latch
+from ..errors import MvtkError
+from ._commands import COMMANDS
 
-#: Modules that register sub-commands, in the order they appear in ``mvtk --help``.
-COMMAND_MODULES = (
-    "mvtk._run_cli",
-    "mvtk._init_cli",
-    "mvtk.io._cli",
-    "mvtk.damping._cli",
-    "mvtk.fe._cli",
-    "mvtk.updating._cli",
-    "mvtk.reduction._cli",
-    "mvtk.control._cli",
-    "mvtk.modal._cli",
-    "mvtk.correlation._cli",
-    "mvtk.report._cli",
-)
+__all__ = ["main", "build_parser", "plain_warnings"]
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _requested(argv: list[str]) -> str | None:
+    """The sub-command named on the command line (the first word that is not an option)."""
+    for word in argv:
+        if word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(command: str | None = "*") -> argparse.ArgumentParser:
+    """The ``mvtk`` argument parser.
+
+    Parameters
+    ----------
+    command : str or None
+        The sub-command whose module is imported to define its arguments; the others
+        are listed by name and help only. ``"*"`` (default) imports every command
+        module (the full parser, as the documentation prints it); None imports none.
+    """
     parser = argparse.ArgumentParser(
         prog="mvtk", description="mvtk: structural dynamics model validation"
     )
     parser.add_argument("--version", action="version", version=f"mvtk {__version__}")
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in COMMAND_MODULES:
-        if importlib.util.find_spec(name) is None:
-            continue
-        importlib.import_module(name).add_parser(subparsers)
+    for name, cmd in COMMANDS.items():
+        if command in ("*", name):
+            importlib.import_module(cmd.module).add_parser(subparsers)
+        else:
+            subparsers.add_parser(name, help=cmd.help, add_help=False)
     return parser
 
 
@@ -101,7 +102,8 @@ def plain_warnings(prog: str):
 def main(argv: list[str] | None = None) -> int:
     """Run the ``mvtk`` command line; returns the exit status (see the module docstring)."""
     try:
-        parser = build_parser()
+        argv = sys.argv[1:] if argv is None else list(argv)
+        parser = build_parser(_requested(argv))
         args = parser.parse_args(argv)
     except KeyboardInterrupt:  # during start-up (imports)
         forget_unhandled_interrupt()

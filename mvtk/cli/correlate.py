@@ -13,6 +13,8 @@ import argparse
 import json
 import sys
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser"]
 
 
@@ -20,7 +22,7 @@ def add_parser(subparsers) -> None:
     """Register the ``correlate`` sub-command."""
     p = subparsers.add_parser(
         "correlate",
-        help="map a test geometry onto an FE model; MAC, pairing and COMAC",
+        help=COMMANDS["correlate"].help,
         description="Map the sensors of a test geometry (UFF, TOML or CSV) onto the FE "
         "model of a structure TOML and correlate test shapes with the FE modes.",
     )
@@ -41,10 +43,10 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk correlate``; errors propagate as MvtkError."""
+    from ..correlation._correlate import correlate
+    from ..correlation._geometry import read_test_geometry
+    from ..correlation._shapes import read_test_shapes
     from ..fe import build_model, modal_analysis
-    from ._correlate import correlate
-    from ._geometry import read_test_geometry
-    from ._shapes import read_test_shapes
 
     geo = read_test_geometry(args.geometry, units_scale=args.units_scale)
     n_default = sum(s.source == "default +z" for s in geo.sensors)

@@ -7,6 +7,7 @@ import re
 from pathlib import Path
 
 from ..errors import ParameterError
+from ._commands import COMMANDS
 
 __all__ = ["add_parser"]
 
@@ -25,7 +26,7 @@ def _report(args: argparse.Namespace) -> int:
     if verdicts:
         print(f"verdict: {verdicts[0].strip()}")
     if args.pdf:
-        from ._pdf import to_pdf
+        from ..report._pdf import to_pdf
 
         out = to_pdf(page, args.output, timeout=args.timeout)
         print(f"pdf: {out} ({out.stat().st_size / 1024:.0f} kB)")
@@ -35,7 +36,7 @@ def _report(args: argparse.Namespace) -> int:
 def add_parser(subparsers) -> None:
     """Register ``mvtk report``."""
     p = subparsers.add_parser(
-        "report", help="show a written report's verdict; --pdf prints it to PDF",
+        "report", help=COMMANDS["report"].help,
         description=__doc__,
     )
     p.add_argument("dir", help="report folder (with index.html), e.g. the --out of mvtk run")

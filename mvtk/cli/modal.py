@@ -8,16 +8,18 @@ import sys
 import warnings
 from pathlib import Path
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser", "load_frf"]
 
 
 def add_parser(subparsers) -> None:
     """Register the ``modal`` sub-command."""
-    from ..io._cli import add_reader_options
+    from ._common import add_reader_options
 
     p = subparsers.add_parser(
         "modal",
-        help="experimental/operational modal analysis (pLSCF+LSFD, SSI-cov)",
+        help=COMMANDS["modal"].help,
         description="Read measurement files (mvtk.io.read) and identify modes. FRF files "
         "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix and "
         "identified by pLSCF + LSFD; time histories with a force channel give H1 FRFs "
@@ -74,7 +76,7 @@ def load_frf(paths, *, df_hz=None, frf_type=None, options=None):
 
     from .. import io
     from ..errors import DimensionError
-    from ._frf import as_frf_matrix
+    from ..modal._frf import as_frf_matrix
 
     mats = []
     for p in paths:
@@ -112,10 +114,10 @@ def _identify(args):
     import numpy as np
 
     from .. import io
-    from ..io._cli import reader_options
-    from ._frf import frf_matrix
-    from ._identify import identify
-    from ._ssi import identify_output_only
+    from ..modal._frf import frf_matrix
+    from ..modal._identify import identify
+    from ..modal._ssi import identify_output_only
+    from ._common import reader_options
 
     options = reader_options(args)
     first = io.read(args.files[0], **_read_options(args.files[0], args.df_hz, options))
@@ -140,15 +142,18 @@ def _identify(args):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk modal``; returns the exit code (errors propagate as MvtkError)."""
+    from ._common import spare_dask_probe
+
+    spare_dask_probe()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         modes = _identify(args)
         if args.uff_modes:
-            from ._export import write_modes_uff
+            from ..modal._export import write_modes_uff
 
             write_modes_uff(modes, args.uff_modes)
         if args.uff_frf and modes.synthesised is not None:
-            from ._export import write_frf_uff
+            from ..modal._export import write_frf_uff
 
             write_frf_uff(modes.synthesised, args.uff_frf)
     for w in caught:

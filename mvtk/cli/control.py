@@ -11,6 +11,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser", "plant_from_arrays"]
 
 _TEXT_COLUMNS = ("settling_time_s", "zeta_mode1", "fn_mode1_hz", "stable",
@@ -20,11 +22,11 @@ _TEXT_COLUMNS = ("settling_time_s", "zeta_mode1", "fn_mode1_hz", "stable",
 
 def add_parser(subparsers) -> None:
     """Register the ``control`` sub-command."""
-    from .._run_cli import add_cache_argument
+    from ._common import add_cache_argument
 
     p = subparsers.add_parser(
         "control",
-        help="compare the controllers of a study's [control] section on its SE plant",
+        help=COMMANDS["control"].help,
         description="Run the study's stages up to its [control] section (cached) and print "
         "per controller: settling time, closed-loop damping of mode 1, stability (largest "
         "real part of the closed-loop poles), FFT peak reduction and actuator peak. Exit "
@@ -40,7 +42,7 @@ def add_parser(subparsers) -> None:
 
 def plant_from_arrays(pa):
     """The SE plant from the study's reduction-stage arrays (M, C, K, B, Cq, Cv, D)."""
-    from ._plant import StructuralPlant
+    from ..control._plant import StructuralPlant
 
     return StructuralPlant(
         pa["M"].values, pa["C"].values, pa["K"].values, pa["B"].values, pa["Cq"].values,
@@ -53,7 +55,7 @@ def plant_from_arrays(pa):
 def _main(args: argparse.Namespace) -> int:
     import pandas as pd
 
-    from .._run_cli import json_document, run_view
+    from ._common import json_document, run_view
 
     res = run_view(args.study, ["control"], args.cache)
     ctl = res.results["control"]

@@ -5,12 +5,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser"]
 
 
 def _init(args: argparse.Namespace) -> int:
-    from .io._cli import reader_options
-    from .study._init import init_study
+    from ..study._init import init_study
+    from ._common import reader_options
 
     res = init_study(args.folder, structure=args.structure, measurements=args.measurements,
                      name=args.name, overwrite=args.force, read_options=reader_options(args),
@@ -31,7 +33,7 @@ def _init(args: argparse.Namespace) -> int:
 def add_parser(subparsers) -> None:
     """Register ``mvtk init``."""
     p = subparsers.add_parser(
-        "init", help="write a first study TOML (and structure TOML) from your files",
+        "init", help=COMMANDS["init"].help,
         description="Read the measurement files, recognise the tests they hold (hammer "
         "test, free decay, multi-point FRF set) and write DIR/study.toml with the channels, "
         "record lengths and resonances found, plus DIR/structure.toml (a placeholder) when "
@@ -50,7 +52,7 @@ def add_parser(subparsers) -> None:
                    "node, x, y, z in m), written as [modal] geometry")
     p.add_argument("--name", default=None, help="study name (default: the folder name)")
     p.add_argument("--force", action="store_true", help="overwrite existing files")
-    from .io._cli import add_reader_options
+    from ._common import add_reader_options
 
     add_reader_options(p)
     p.set_defaults(func=_init)

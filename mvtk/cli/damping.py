@@ -14,6 +14,8 @@ import argparse
 import sys
 import warnings
 
+from ._commands import COMMANDS
+
 __all__ = ["add_parser", "run"]
 
 _METHODS = ("auto", "half_power", "envelope", "log_decrement")
@@ -22,11 +24,11 @@ _VARIANTS = {"half_power": ("fit", "interpolate"), "envelope": ("hilbert", "peak
 
 def add_parser(subparsers) -> None:
     """Register the ``damping`` sub-command."""
-    from ..io._cli import add_reader_options
+    from ._common import add_reader_options
 
     p = subparsers.add_parser(
         "damping",
-        help="natural frequencies and damping ratios from a measurement file",
+        help=COMMANDS["damping"].help,
         description="Read a measurement file (mvtk.io.read) and identify fn and zeta. "
         "With no option: half-power on the file's FRF/spectrum, or on the H1 FRF of time "
         "histories with a force channel (impact or random detected; record, windows and "
@@ -112,14 +114,17 @@ def _half_power_input(ds, args, notes):
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk damping``; returns the exit code (errors propagate as MvtkError)."""
+    from ._common import spare_dask_probe
+
+    spare_dask_probe()
     import pandas as pd
 
     from .. import io
+    from ..damping._common import NoEstimateError
+    from ..damping._decay import envelope_fit, log_decrement
+    from ..damping._half_power import half_power
     from ..errors import ParameterError
-    from ..io._cli import reader_options
-    from ._common import NoEstimateError
-    from ._decay import envelope_fit, log_decrement
-    from ._half_power import half_power
+    from ._common import reader_options
 
     method = args.method
     variant = args.variant

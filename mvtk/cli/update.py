@@ -33,104 +33,12 @@ a study section is part of the description handed to the builder.
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 from pathlib import Path
-from typing import Any
 
-from ..errors import ConfigError
+from ._commands import COMMANDS
 
-__all__ = ["add_parser", "load_study", "run_update"]
-
-
-def _create_missing(description: dict, path: str, value: Any, where: str) -> None:
-    """Create the field ``path`` (dict keys only) with ``value`` if it does not exist."""
-    node = description
-    parts = path.split(".")
-    for part in parts[:-1]:
-        if isinstance(node, list):
-            try:
-                node = node[int(part)]
-            except (ValueError, IndexError):
-                return  # let Parameter.resolve report the bad path
-            continue
-        if not isinstance(node, dict):
-            return
-        node = node.setdefault(part, {})
-    if isinstance(node, dict) and parts[-1] not in node:
-        if not isinstance(value, int | float) or isinstance(value, bool):
-            raise ConfigError(f"{where}.initial: expected a number, got {value!r}")
-        node[parts[-1]] = float(value)
-
-
-def _builder(spec: str):
-    if not isinstance(spec, str) or spec.count(":") != 1:
-        raise ConfigError(
-            f"updating.builder: expected 'package.module:function', got {spec!r}"
-        )
-    mod, func = spec.split(":")
-    try:
-        fn = getattr(importlib.import_module(mod), func)
-    except (ImportError, AttributeError) as err:
-        raise ConfigError(f"updating.builder: cannot import {spec!r}: {err}") from err
-    if not callable(fn):
-        raise ConfigError(f"updating.builder: {spec!r} is not callable")
-    return fn
-
-
-def load_study(path: str | Path) -> dict[str, Any]:
-    """Read a study TOML and return the keyword arguments of :func:`mvtk.updating.update`.
-
-    The study is parsed by :func:`mvtk.study.load_study` (the one study schema).
-
-    Returns
-    -------
-    dict
-        ``description``, ``parameters``, ``targets`` and the solver settings given
-        (``builder``, ``n_modes``, ``regularization``, ``mac_weight``, ``max_iter``,
-        ``frequency_std``), plus ``structure_path`` (or None for an inline structure).
-
-    Raises
-    ------
-    ConfigError
-        Missing ``[updating]`` section, unknown keys, bad parameters or targets.
-    """
-    from ..study import load_study as load
-    from ._parameters import Parameter
-    from ._targets import FrequencyTarget
-
-    study = load(path)
-    up = study.config.get("updating")
-    if up is None:
-        raise ConfigError(f"{path}: no [updating] section (found sections "
-                          f"{sorted(study.config)})")
-    description = study.description()
-    for i, p in enumerate(up["parameters"]):
-        if p.get("initial") is not None:
-            _create_missing(description, p["path"], p["initial"],
-                            f"{path}: updating.parameters[{i}]")
-    if up.get("targets_hz") is not None:
-        targets = [FrequencyTarget(float(f), label=f"f{i + 1}")
-                   for i, f in enumerate(up["targets_hz"])]
-    else:
-        targets = [FrequencyTarget.from_dict(dict(t), f"{path}: updating.targets[{i}]")
-                   for i, t in enumerate(up["targets"])]
-    kwargs: dict[str, Any] = {
-        "description": description,
-        "parameters": [
-            Parameter.from_dict({k: v for k, v in p.items() if v is not None},
-                                f"{path}: updating.parameters[{i}]")
-            for i, p in enumerate(up["parameters"])
-        ],
-        "targets": targets,
-        "structure_path": study.structure_file,
-    }
-    if up.get("builder") is not None:
-        kwargs["builder"] = _builder(up["builder"])
-    for key in ("n_modes", "regularization", "mac_weight", "max_iter", "frequency_std"):
-        if up.get(key) is not None:
-            kwargs[key] = up[key]
-    return kwargs
+__all__ = ["add_parser", "run_update"]
 
 
 def _format_tables(summary: dict) -> str:
@@ -157,7 +65,7 @@ def run_update(args: argparse.Namespace) -> int:
     """Entry point of ``mvtk update``; returns the exit code (0 ok, 1 not converged)."""
     import tomli_w
 
-    from .._run_cli import check_output_file, json_document, run_view
+    from ._common import check_output_file, json_document, run_view
 
     if args.out is not None:
         check_output_file(args.out, "--out")
@@ -184,11 +92,11 @@ def run_update(args: argparse.Namespace) -> int:
 
 def add_parser(subparsers) -> None:
     """Register ``mvtk update`` on an argparse sub-parser collection."""
-    from .._run_cli import add_cache_argument
+    from ._common import add_cache_argument
 
     p = subparsers.add_parser(
         "update",
-        help="update FE model parameters to measured natural frequencies",
+        help=COMMANDS["update"].help,
         description="Update the structure of STUDY.toml to the targets of its [updating] "
         "section (the updating stage of the study pipeline) and print the residual, "
         "parameter and unpaired-mode tables. Exit status 1 when the update did not "
