@@ -113,7 +113,7 @@ def _identify(args):
 
     from .. import io
     from ..io._cli import reader_options
-    from ._frf import frf_matrix
+    from ._frf import frf_of_sets
     from ._identify import identify
     from ._ssi import identify_output_only
 
@@ -126,9 +126,10 @@ def _identify(args):
                                                             th["quantity"].values}
         if has_force or args.reference is not None:
             sets = [first] + [io.read(p, **options) for p in args.files[1:]]
-            ref = args.reference if args.reference is not None else {"quantity": "force"}
-            h = frf_matrix(sets, ref, excitation="impact" if args.impact else args.excitation,
-                           nperseg=args.nperseg)
+            # the study's path: a roving hammer is turned by reciprocity
+            h = frf_of_sets(sets, args.reference,
+                            excitation="impact" if args.impact else args.excitation,
+                            nperseg=args.nperseg)
             return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
         ssi_orders = range(2, 61, 2) if args.orders is None else range(2, args.orders + 1, 2)
         return identify_output_only(first, args.fmin, args.fmax, orders=ssi_orders,
@@ -159,6 +160,9 @@ def run(args: argparse.Namespace) -> int:
                "modes": json.loads(table.to_json(orient="records")),
                "frf_correlation": (None if modes.correlation is None
                                    else modes.correlation.attrs["overall"])}
+        if modes.frf is not None and modes.frf.attrs.get("set_quality"):
+            out["set_quality"] = json.loads(modes.frf.attrs["set_quality"])
+            out["window_policy"] = modes.frf.attrs.get("window_policy", "")
         sys.stdout.write(json.dumps(out) + "\n")
         return 0
     sys.stdout.write(f"{modes.method}: {modes.n_modes} mode(s) in "
