@@ -65,47 +65,17 @@ def _read_options(path, df_hz=None, options=None) -> dict:
 
 
 def load_frf(paths, *, df_hz=None, frf_type=None, options=None):
-    """FRF matrix from one or several FRF files, merged along the responses.
+    """FRF matrix from one or several FRF files, merged by node/direction
+    (:func:`mvtk.modal.merge_frf`: one file per reference, or per response group).
 
     ``options`` are reader options (:func:`mvtk.io.read` keywords) applied to every file.
     """
-    import numpy as np
-    import xarray as xr
-
     from .. import io
-    from ..errors import DimensionError
-    from ._frf import as_frf_matrix
+    from ._frf import as_frf_matrix, merge_frf
 
-    mats = []
-    for p in paths:
-        mats.append((p, as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)),
-                                      frf_type=frf_type)))
-    if len(mats) == 1:
-        return mats[0][1]
-    f0 = mats[0][1]["frequency"].values
-    nref = mats[0][1].sizes["reference"]
-    parts = []
-    for p, h in mats:
-        f = h["frequency"].values
-        if f.shape != f0.shape or not np.allclose(f, f0) or h.sizes["reference"] != nref:
-            raise DimensionError(
-                f"{p}: {h.sizes['reference']} reference(s) x {f.size} lines up to "
-                f"{f[-1]:g} Hz; expected the {nref} reference(s) and {f0.size} lines of "
-                f"{mats[0][0]}"
-            )
-        names = [str(r) for r in h["response"].values]
-        if len(mats) > 1:
-            names = [f"{Path(p).stem}:{r}" if r in ("", "reference") or int(n) < 0 else r
-                     for r, n in zip(names, h["node"].values)]
-        parts.append(h.assign_coords(response=names, reference=mats[0][1]["reference"].values,
-                                     reference_node=mats[0][1]["reference_node"],
-                                     reference_direction=mats[0][1]["reference_direction"],
-                                     reference_quantity=mats[0][1]["reference_quantity"],
-                                     reference_units=mats[0][1]["reference_units"],
-                                     frequency=f0))
-    out = xr.concat(parts, dim="response", coords="minimal", compat="override",
-                    combine_attrs="override")
-    return as_frf_matrix(out)
+    mats = [as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)), frf_type=frf_type)
+            for p in paths]
+    return merge_frf(mats, [Path(p).name for p in paths])
 
 
 def _identify(args):

@@ -24,7 +24,7 @@ from ..errors import (
     UnitsError,
 )
 
-__all__ = ["frf_matrix", "frf_of_sets", "as_frf_matrix", "convert_frf", "reciprocal",
+__all__ = ["frf_matrix", "frf_of_sets", "merge_frf", "as_frf_matrix", "convert_frf", "reciprocal",
            "FRF_TYPES"]
 
 #: FRF types and the power of ``i omega`` that turns a receptance into them.
@@ -396,7 +396,11 @@ def frf_matrix(
         ``{"quantity": "force"}``).
     estimator, excitation, **frf_options
         Passed to :func:`mvtk.signal.frf` (``nperseg``, ``window``, ``trigger_level``,
-        ``exponential_tau_s``...). All sets must give the same frequency lines.
+        ``exponential_tau_s``, ``double_hit``...). All sets must give the same frequency
+        lines. Impact tests get one policy for every set
+        (:func:`mvtk.signal.impact_policy`): one record length, pretrigger, FFT length and
+        one exponential window chosen from the slowest decay over the sets (values
+        given here are kept), stated in ``attrs["window_policy"]``.
         ``excitation="auto"`` (default) detects impact, sweep or random excitation from
         each set's reference, as :func:`mvtk.signal.frf` does; every set must be found
         the same.
@@ -410,13 +414,24 @@ def frf_matrix(
         ``("reference", "frequency")`` (each reference's autospectrum in dB re its
         largest value above 0 Hz, averaged over the sets that share the reference: how
         strongly each line was excited; :func:`identify` marks modes it missed) and
-        ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``.
+        ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``,
+        ``exponential_window_tau_s`` (s, the window every set shares, when one was
+        applied: its damping ``1/(tau omega_n)`` is in every pole), ``window_policy``
+        (impact) and ``set_quality``: the per-set quality table (double hits, clipped
+        channels, coherence, excitation level; :func:`mvtk.signal.set_quality` reads it
+        as a :class:`mvtk.signal.SetQuality`). A ``pair_quality`` coordinate
+        ``(response, reference)`` holds, for each pair, the verdicts of the sets behind
+        it that are not ``"ok"`` (``""`` when all are). A set whose every impact record
+        holds a double hit is refused (left out, named in an
+        :class:`~mvtk.errors.AccuracyWarning` and in the table).
 
     Raises
     ------
     DimensionError
         The sets give different frequency lines, or the merged grid misses pairs (the
         message lists them): every response must be measured with every reference.
+    DoubleHitError
+        Every set was refused for double hits.
     """
     if isinstance(sets, (xr.DataArray, xr.Dataset)):
         sets = [sets]
@@ -431,20 +446,22 @@ def frf_matrix(
     for k, kind in enumerate(kinds):
         if kind != kinds[0]:
             raise ParameterError(
-                f"measurement set {k + 1} ({sources[k]}): {kind} excitation, but set 1 "
-                f"({sources[0]}) is {kinds[0]}; pass excitation= explicitly to treat every "
-                "set alike")
+                f"measurement set {k + 1}: {kind} excitation, but set 1 is {kinds[0]}; "
+                "pass excitation= explicitly to treat every set alike (set 1: "
+                f"{sources[0]}, set {k + 1}: {sources[k]})")
     policy = None
-    if kinds[0] == "impact" and all(frf_options.get(key, "auto") in ("auto", None)
-                                    for key in ("nperseg", "exponential_tau_s", "nfft",
-                                                "pretrigger")):
-        # one record, pretrigger, window and FFT length for the whole test
+    if kinds[0] == "impact":
+        # one record, pretrigger, window and FFT length for the whole test (the values
+        # given are kept)
         policy = signal.impact_policy(
             sets, reference, response,
             trigger_level=frf_options.get("trigger_level", 0.1),
             double_hit_fraction=frf_options.get("double_hit_fraction",
                                                 signal.DOUBLE_HIT_FRACTION),
-            names=sources)
+            names=sources, nperseg=frf_options.get("nperseg"),
+            pretrigger=frf_options.get("pretrigger"),
+            exponential_tau_s=frf_options.get("exponential_tau_s", "auto"),
+            nfft=frf_options.get("nfft", "auto"))
         kwargs.update(policy.frf_options(), excitation="impact")
     parts, rows, refused = [], [], []
     for k, x in enumerate(sets):
@@ -659,3 +676,99 @@ def frf_of_sets(sets, reference=None, response=None, *, excitation: str = "auto"
                 f"{frf.sizes['reference']} sensor(s), turned by reciprocity (H_ij = H_ji)")
     frf.attrs["reciprocity"] = note
     return frf
+
+
+def merge_frf(mats, names=None) -> xr.DataArray:
+    """One FRF matrix from several, merged by node/direction of responses and references.
+
+    Each file of a test may hold one reference (a UFF 58 file per shaker or hammer
+    position) or a group of responses: the pairs are placed on a grid keyed by
+    ``(node, direction)`` of the response and of the reference (responses without a
+    node, ``node=-1``, by name prefixed with the file's name; references without a node
+    by name: the one unnamed reference of several files is the same excitation). A pair
+    measured in several matrices is averaged.
+
+    Parameters
+    ----------
+    mats : sequence of FRF matrices
+        Anything :func:`as_frf_matrix` adopts, on the same frequency lines and of one
+        FRF type.
+    names : sequence of str, optional
+        Names of the matrices (file names) for messages and unnamed channels.
+
+    Raises
+    ------
+    DimensionError
+        Different frequency lines, or the grid misses pairs (listed).
+    UnitsError
+        The matrices are of different FRF types (convert them first, :func:`convert_frf`).
+    """
+    hs = [as_frf_matrix(m) for m in mats]
+    names = list(names) if names is not None else [f"matrix {k + 1}" for k in range(len(hs))]
+    if len(hs) == 1:
+        return hs[0]
+    f0 = hs[0]["frequency"].values
+    kinds = {h.attrs["frf_type"] for h in hs}
+    if len(kinds) > 1:
+        found = ", ".join(f"{n}: {h.attrs['frf_type']}" for n, h in zip(names, hs))
+        raise UnitsError(f"merge_frf: the matrices are of different FRF types ({found}); "
+                         "convert them to one type first (mvtk.modal.convert_frf)")
+    rkeys: dict = {}
+    fkeys: dict = {}
+    for k, h in enumerate(hs):
+        f = h["frequency"].values
+        if f.shape != f0.shape or not np.allclose(f, f0):
+            raise DimensionError(f"{names[k]}: {f.size} lines up to {f[-1]:g} Hz; expected the "
+                                 f"{f0.size} lines of {names[0]}")
+        for i in range(h.sizes["response"]):
+            key = _key(h["node"].values[i], h["direction"].values[i],
+                       f"{names[k]}:{h['response'].values[i]}")
+            rkeys.setdefault(key, (k, i))
+        for j in range(h.sizes["reference"]):
+            key = _key(h["reference_node"].values[j], h["reference_direction"].values[j],
+                       str(h['reference'].values[j]))
+            fkeys.setdefault(key, (k, j))
+    rlist, flist = list(rkeys), list(fkeys)
+    acc = np.zeros((len(rlist), len(flist), f0.size), complex)
+    cnt = np.zeros((len(rlist), len(flist)))
+    for k, h in enumerate(hs):
+        ri = [rlist.index(_key(h["node"].values[i], h["direction"].values[i],
+                               f"{names[k]}:{h['response'].values[i]}"))
+              for i in range(h.sizes["response"])]
+        fi = [flist.index(_key(h["reference_node"].values[j], h["reference_direction"].values[j],
+                               str(h['reference'].values[j])))
+              for j in range(h.sizes["reference"])]
+        acc[np.ix_(ri, fi)] += h.values
+        cnt[np.ix_(ri, fi)] += 1
+    missing = np.argwhere(cnt == 0)
+    if missing.size:
+        lab = [f"{a}{b}" if a != "name" else b for a, b in rlist]
+        flab = [f"{a}{b}" if a != "name" else b for a, b in flist]
+        raise DimensionError(
+            f"merge_frf: the files do not measure {len(missing)} response/reference pair(s): "
+            + ", ".join(f"({lab[a]}, {flab[b]})" for a, b in missing[:8])
+            + "; every response must be measured with every reference")
+    acc /= cnt[..., None]
+
+    def coords(keys, table, is_ref):
+        cols = (("reference", "reference_node", "reference_direction", "reference_quantity",
+                 "reference_units") if is_ref else
+                ("response", "node", "direction", "quantity", "units"))
+        out = {c: [] for c in cols}
+        for key in keys:
+            k, i = table[key]
+            h = hs[k]
+            for c in cols:
+                v = h[c].values[i]
+                out[c].append(v)
+        label = [f"{n}{d}" if int(n) >= 0 else (str(nm) if is_ref
+                                                 else f"{names[table[key][0]]}:{nm}")
+                 for key, nm, n, d in zip(keys, out[cols[0]], out[cols[1]], out[cols[2]])]
+        dim = cols[0]
+        return {dim: label, **{c: (dim, out[c]) for c in cols[1:]}}
+
+    da = xr.DataArray(acc, dims=_DIMS,
+                      coords={**coords(rlist, rkeys, False), **coords(flist, fkeys, True),
+                              "frequency": f0},
+                      attrs={**hs[0].attrs, "n_files": len(hs)})
+    return as_frf_matrix(da)

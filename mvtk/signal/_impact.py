@@ -87,7 +87,8 @@ def second_pulse(force: np.ndarray, hit: int, end: int, level: float,
     pulse runs from ``hit`` while ``force >= level``; a second pulse is a sample in
     ``[pulse end + pulse width, end)`` at or above ``fraction`` x the hit's peak (the
     force must have left the pulse for one pulse width: the samples just after a pulse
-    are its own tail).
+    are its own tail) that rises from a force near zero: a lobe preceded by a negative
+    excursion of more than half its height is anti-alias filter ringing, not a hit.
 
     Returns
     -------
@@ -109,10 +110,16 @@ def second_pulse(force: np.ndarray, hit: int, end: int, level: float,
     if s0 >= end or not peak > 0:
         return None
     seg = force[s0:end]
-    above = np.flatnonzero(seg >= fraction * peak)
-    if not above.size:
+    above = s0 + np.flatnonzero(seg >= fraction * peak)
+    # anti-alias filter ringing after a short pulse alternates in sign, its negative
+    # lobes as large as the positive ones; a rebound rises from a force near zero
+    for k in above:
+        top = float(np.max(force[k:min(k + width + 2, n)]))
+        if np.min(force[e:k]) > -0.5 * top:
+            break
+    else:
         return None
-    k = s0 + int(above[0])
+    k = int(k)
     # where the second pulse rose from the floor (below half the threshold)
     j = k
     while j > s0 and force[j - 1] >= 0.5 * fraction * peak:
@@ -247,8 +254,9 @@ class ImpactPolicy:
 
 
 def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
-                  double_hit_fraction: float = DOUBLE_HIT_FRACTION, names=None
-                  ) -> ImpactPolicy:
+                  double_hit_fraction: float = DOUBLE_HIT_FRACTION, names=None,
+                  nperseg: int | None = None, pretrigger: int | None = None,
+                  exponential_tau_s="auto", nfft="auto") -> ImpactPolicy:
     """One record length and one exponential window for all sets of an impact test.
 
     Each set alone would take the whole time between its hits as record and its own
@@ -276,6 +284,9 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
         As in :func:`mvtk.signal.frf`.
     names : sequence of str, optional
         Names of the sets for the reason text (file names); default ``set k``.
+    nperseg, pretrigger, exponential_tau_s, nfft
+        As in :func:`mvtk.signal.frf`; a value given is kept for every set (None for
+        ``exponential_tau_s``: no window), ``None``/``"auto"`` is chosen as above.
 
     Returns
     -------
@@ -323,8 +334,9 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
         data.append((r, y, pre, info["available"]))
     avail = np.array([d[3] for d in data], dtype=float)
     typical = avail[avail >= 0.5 * np.median(avail)]
-    nperseg = int(np.min(typical))
-    pre = int(min(d[2] for d in data))
+    given = nperseg is not None
+    nperseg = int(nperseg) if given else int(np.min(typical))
+    pre = int(pretrigger) if pretrigger is not None else int(min(d[2] for d in data))
     win = _window("boxcar", nperseg)
     tails = []
     for r, y, _, _ in data:
@@ -344,14 +356,27 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
         tails.append(_tail_ratio(yy, use, nperseg, pre, win))
     tails = np.asarray(tails)
     slow = int(np.argmax(tails))
-    tau = _tau_for_tail(float(tails[slow]), nperseg, pre, fs0) if tails[slow] > 0.01 else None
-    nfft = int(2 ** np.ceil(np.log2(8 * nperseg)))
+    if exponential_tau_s == "auto":
+        tau = (_tau_for_tail(float(tails[slow]), nperseg, pre, fs0) if tails[slow] > 0.01
+               else None)
+    else:
+        tau = None if exponential_tau_s is None else float(exponential_tau_s)
+    nfft = (int(2 ** np.ceil(np.log2(8 * nperseg))) if nfft in ("auto", None) and
+            (tau is not None or tails[slow] <= 0.011) else
+            nperseg if nfft in ("auto", None) else int(nfft))
+    if given:
+        what = "given"
+    else:
+        what = "the shortest whole record between hits" + (
+            f", {int(np.sum(avail < 0.5 * np.median(avail)))} set(s) with a shorter one "
+            "left to their double-hit check" if typical.size < avail.size else "")
     reason = (f"one policy for the {len(data)} sets: record {nperseg} samples = "
-              f"{nperseg / fs0:.4g} s (the shortest whole record between hits"
-              + (f", {int(np.sum(avail < 0.5 * np.median(avail)))} set(s) with a shorter "
-                 "one left to their double-hit check" if typical.size < avail.size else "")
-              + f"), pretrigger {pre}, zero-padded to {nfft}; ")
-    if tau is None:
+              f"{nperseg / fs0:.4g} s ({what}), pretrigger {pre}"
+              + (f", zero-padded to {nfft}" if nfft > nperseg else "") + "; ")
+    if exponential_tau_s != "auto":
+        reason += ("exponential window as given: " + ("none" if tau is None else
+                                                      f"tau = {tau:.4g} s on every set"))
+    elif tau is None:
         reason += ("no exponential window: every response decays to 1 % within the record "
                    f"(largest tail {tails[slow]:.2%}, {names[slow]})")
     else:
