@@ -162,7 +162,7 @@ def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_
     if short:
         warnings.warn(
             f"impact FRF: {len(short)} hit(s) too close to the ends of the data (at "
-            f"{[round(t, 4) for t in short]} s) for a record of {nperseg} samples with "
+            f"{[round(float(t), 4) for t in short]} s) for a record of {nperseg} samples with "
             f"{pretrigger} pretrigger; not used",
             AccuracyWarning, stacklevel=3,
         )

@@ -71,6 +71,20 @@ def test_double_hit_and_clipped_hit_are_named_and_tabulated(campaign):
     pq = rec["pair_quality"].sel(response="20+z").values[0]
     assert pq.startswith("set 20: clipped")
     assert rec["pair_quality"].sel(response="1+z").values[0] == ""
+    # alone, each set would pick its own window: no single correction would fit them
+    alone = set()
+    for x in sets[:6]:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            alone.add(round(signal.frf(x, {"quantity": "force"}).attrs[
+                "exponential_window_tau_s"], 4))
+    assert len(alone) > 1
+    # the table and the pair verdicts survive io.write / io.read
+    io.write(rec, Path(campaign[0]).parent / "frf.nc")
+    back = modal.as_frf_matrix(io.read(Path(campaign[0]).parent / "frf.nc"))
+    assert signal.set_quality(back).to_dataframe()["verdict"].tolist() == q["verdict"].tolist()
+    assert back["pair_quality"].sel(response="20+z").values[0] == pq
+    assert back.attrs["exponential_window_tau_s"] == tau
     # identification on the common window, its damping removed
     res = modal.identify(rec, 10.0, 800.0)
     tab = res.to_dataframe()
@@ -80,6 +94,7 @@ def test_double_hit_and_clipped_hit_are_named_and_tabulated(campaign):
     np.testing.assert_allclose(zeta, RH.ZETA[:4], rtol=0.10)  # found: +6.1 % on mode 1
 
 
+@pytest.mark.slow
 def test_cli_and_study_give_the_same_modes(campaign, tmp_path, capsys):
     from mvtk.cli import main
     from mvtk.study import run

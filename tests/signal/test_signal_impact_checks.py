@@ -77,3 +77,23 @@ def test_clipping_detector_on_a_known_clip_and_real_files():
         d = signal.frf(acc_file, {"quantity": "force"})
     assert d.attrs["double_hit_s"] == [] and d.attrs["clipped"] == ""
     assert not [w for w in rec if "double hit" in str(w.message) or "clipped" in str(w.message)]
+
+
+def test_quality_table_of_averaged_sets_has_coherence(rng):
+    from mvtk import modal
+    from mvtk import testing as T
+
+    # two hammer positions, 4 hits each (4 averages): coherence is defined
+    a = T.impact_test([30.0, 75.0], [0.01, 0.01], 1024.0, 2.0, 4, rng)
+    b = T.impact_test([30.0, 75.0], [0.01, 0.01], 1024.0, 2.0, 4, rng)
+    b = b.copy(data=b.values + np.r_[0.0, 0.3][:, None] * np.std(b.values[1])
+               * rng.standard_normal(b.shape))  # a noisy response: coherence drops
+    a = a.assign_coords(node=("channel", [1, 9]), direction=("channel", ["+z", "+z"]))
+    b = b.assign_coords(node=("channel", [2, 9]), direction=("channel", ["+z", "+z"]))
+    h = modal.frf_matrix([a, b], {"quantity": "force"})
+    q = signal.set_quality(h).to_dataframe()
+    assert q["n_averages"].tolist() == [4, 4] and q["n_hits"].tolist() == [4, 4]
+    assert q.loc[1, "coherence"] > 0.95 and q.loc[1, "verdict"] == "ok"
+    assert q.loc[2, "coherence"] < signal.COHERENCE_MIN
+    assert q.loc[2, "verdict"].startswith("mean coherence")
+    assert q.loc[1, "peak_force"] == pytest.approx(np.max(np.abs(a.values[0])), rel=1e-6)
