@@ -404,8 +404,10 @@ def frf(
         crossings less than max(4 samples, 5 ms) after the force fell below the level,
         e.g. anti-alias ringing, belong to the same hit), starting ``pretrigger``
         samples before the crossing (default 1 % of the record, at most the samples
-        before the first hit); records with a second hit are rejected with an
-        :class:`~mvtk.errors.AccuracyWarning`. Default window is rectangular.
+        before the first hit); a record holding a second force pulse (a double hit) is
+        cut before it or refused (see ``double_hit``) with an
+        :class:`~mvtk.errors.AccuracyWarning`, and clipped channels are named. Default
+        window is rectangular.
         ``"sweep"``: deterministic excitation (sine sweep, chirp, stepped sine): one
         record, the whole time history, rectangular window by default (Hann if a
         shorter ``nperseg`` is given; no averaging
