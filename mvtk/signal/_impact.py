@@ -270,7 +270,9 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
     - pretrigger: the smallest automatic pretrigger of the sets (1 % of the record);
     - exponential window: none when every set's response decays to 1 % of its peak
       within the record (RMS of its last 5 %); otherwise the time constant that brings
-      the slowest decay (largest tail) to 1 %, applied to every set;
+      the slowest decay (largest tail) to 1 %, applied to every set. A set whose tail is
+      within 3 x its pretrigger RMS has decayed into its noise floor and does not
+      count (a window cannot make noise decay);
     - FFT length: the next power of two >= 8 x the record (the windowed transients are
       then complete, the lines interpolate their spectrum).
 
@@ -338,7 +340,7 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
     nperseg = int(nperseg) if given else int(np.min(typical))
     pre = int(pretrigger) if pretrigger is not None else int(min(d[2] for d in data))
     win = _window("boxcar", nperseg)
-    tails = []
+    tails, floor = [], []
     for r, y, _, _ in data:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
@@ -353,7 +355,11 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
             continue
         use = starts
         yy = y - _pretrigger_offset(y, use, pre)[:, None] if pre >= 8 else y
-        tails.append(_tail_ratio(yy, use, nperseg, pre, win))
+        tail = _tail_ratio(yy, use, nperseg, pre, win)
+        if pre >= 8 and tail <= 3 * _noise_ratio(yy, use, nperseg, pre):
+            floor.append(len(tails))
+            tail = 0.0  # the record ends in the sensor's noise: the decay is complete
+        tails.append(tail)
     tails = np.asarray(tails)
     slow = int(np.argmax(tails))
     if exponential_tau_s == "auto":
@@ -373,6 +379,9 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
     reason = (f"one policy for the {len(data)} sets: record {nperseg} samples = "
               f"{nperseg / fs0:.4g} s ({what}), pretrigger {pre}"
               + (f", zero-padded to {nfft}" if nfft > nperseg else "") + "; ")
+    if floor:
+        reason += (f"{len(floor)} set(s) end in their noise floor (tail within 3 x the "
+                   "pretrigger RMS: decay complete); ")
     if exponential_tau_s != "auto":
         reason += ("exponential window as given: " + ("none" if tau is None else
                                                       f"tau = {tau:.4g} s on every set"))
@@ -386,6 +395,19 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
                    "ratio (mvtk.signal.exponential_window_correction removes it)")
     return ImpactPolicy(nperseg=nperseg, pretrigger=pre, exponential_tau_s=tau, nfft=nfft,
                         slowest_set=slow + 1, tail_ratio=float(tails[slow]), reason=reason)
+
+
+def _noise_ratio(y: np.ndarray, starts, nperseg: int, pre: int) -> float:
+    """Largest pretrigger RMS over the record's peak (the noise floor), over records."""
+    worst = 0.0
+    for s in starts:
+        seg = y[:, s:s + nperseg]
+        pk = np.max(np.abs(seg[:, pre:]), axis=-1)
+        noise = np.sqrt(np.mean(seg[:, :pre] ** 2, axis=-1))
+        ok = pk > 0
+        if ok.any():
+            worst = max(worst, float(np.max(noise[ok] / pk[ok])))
+    return worst
 
 
 # --- rows of the set-quality table ---------------------------------------------------

@@ -97,3 +97,24 @@ def test_quality_table_of_averaged_sets_has_coherence(rng):
     assert q.loc[2, "coherence"] < signal.COHERENCE_MIN
     assert q.loc[2, "verdict"].startswith("mean coherence")
     assert q.loc[1, "peak_force"] == pytest.approx(np.max(np.abs(a.values[0])), rel=1e-6)
+
+
+def test_window_policy_takes_the_slowest_decay_not_the_noise_floor(rng):
+    from mvtk import testing as T
+
+    def one(zeta, noise):
+        x = T.impact_test(50.0, zeta, 2048.0, 0.5, 1, rng, pretrigger_s=0.02)
+        y = x.values[1] + noise * np.max(np.abs(x.values[1])) * rng.standard_normal(
+            x.sizes["time"])
+        return x.copy(data=np.vstack([x.values[0], y]))
+
+    slow = [one(0.002, 1e-4), one(0.004, 1e-4)]  # tails (end RMS / peak) ~ 23 %, 17 %
+    noisy = one(0.05, 0.03)   # decayed to 0.02 % of its peak, under 3 % noise
+    pol = signal.impact_policy(slow, "force")
+    assert pol.slowest_set == 1 and pol.tail_ratio > 0.2
+    both = signal.impact_policy([noisy, *slow], "force", names=["noisy", "a", "b"])
+    assert both.exponential_tau_s == pytest.approx(pol.exponential_tau_s, rel=1e-12)
+    assert both.slowest_set == 2 and "(a: tail" in both.reason
+    assert "1 set(s) end in their noise floor" in both.reason
+    alone = signal.impact_policy([noisy], "force")
+    assert alone.exponential_tau_s is None and "no exponential window" in alone.reason
