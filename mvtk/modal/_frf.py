@@ -468,7 +468,8 @@ def frf_matrix(
         try:
             part = _one_set(x, reference, response, kwargs, k + 1)
         except DoubleHitError as err:
-            refused.append(f"{sources[k]}: {err}")
+            text = str(err)
+            refused.append(text if text.startswith(sources[k]) else f"{sources[k]}: {text}")
             rows.append((k, err, None))
             continue
         parts.append(part)

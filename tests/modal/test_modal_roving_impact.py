@@ -130,3 +130,13 @@ def test_cli_and_study_give_the_same_modes(campaign, tmp_path, capsys):
     np.testing.assert_allclose(mod["table"]["fn_hz"], cli_fn, rtol=1e-8)  # JSON keeps 10 digits
     np.testing.assert_allclose(mod["table"]["zeta"], cli_zeta, rtol=1e-7)
     assert len(cli_fn) == 4
+
+
+def test_cli_on_the_double_hit_file_alone_is_a_named_refusal(campaign, capsys):
+    from mvtk.cli import main
+
+    assert main(["modal", str(campaign[9])]) == 2
+    err = capsys.readouterr().err
+    assert "hit_node10.csv: every impact record holds a double hit (second pulse at " \
+           "0.02222 s, 40% of the hit at 0.01025 s)" in err
+    assert "frequency lines" not in err and "Traceback" not in err
