@@ -19,9 +19,12 @@ def add_parser(subparsers) -> None:
         "modal",
         help="experimental/operational modal analysis (pLSCF+LSFD, SSI-cov)",
         description="Read measurement files (mvtk.io.read) and identify modes. FRF files "
-        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix and "
+        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix by "
+        "response and reference node/direction and "
         "identified by pLSCF + LSFD; time histories with a force channel give H1 FRFs "
-        "(several files = several measurement sets, merged by node/direction); time "
+        "(several files = several measurement sets, merged by node/direction; impact sets "
+        "share one record and window, double hits and clipping are reported; a roving "
+        "hammer is turned by reciprocity); time "
         "histories without force are identified output-only by SSI-cov. Prints the mode "
         "table with quality columns (stability count, MPC, MPD, reliable, reason).",
     )
