@@ -15,6 +15,7 @@ __all__ = [
     "MvtkError",
     "FormatError",
     "UnsupportedFormatError",
+    "DoubleHitError",
     "DimensionError",
     "UnitsError",
     "ConfigError",
@@ -36,6 +37,10 @@ class MvtkError(Exception):
 
 class FormatError(MvtkError, ValueError):
     """A file (or in-memory object) does not have the expected content or layout."""
+
+
+class DoubleHitError(FormatError):
+    """Every impact record of a measurement holds a second force pulse (a double hit)."""
 
 
 class UnsupportedFormatError(FormatError):

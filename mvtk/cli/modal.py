@@ -21,9 +21,12 @@ def add_parser(subparsers) -> None:
         "modal",
         help=COMMANDS["modal"].help,
         description="Read measurement files (mvtk.io.read) and identify modes. FRF files "
-        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix and "
+        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix by "
+        "response and reference node/direction and "
         "identified by pLSCF + LSFD; time histories with a force channel give H1 FRFs "
-        "(several files = several measurement sets, merged by node/direction); time "
+        "(several files = several measurement sets, merged by node/direction; impact sets "
+        "share one record and window, double hits and clipping are reported; a roving "
+        "hammer is turned by reciprocity); time "
         "histories without force are identified output-only by SSI-cov. Prints the mode "
         "table with quality columns (stability count, MPC, MPD, reliable, reason).",
     )
@@ -67,54 +70,24 @@ def _read_options(path, df_hz=None, options=None) -> dict:
 
 
 def load_frf(paths, *, df_hz=None, frf_type=None, options=None):
-    """FRF matrix from one or several FRF files, merged along the responses.
+    """FRF matrix from one or several FRF files, merged by node/direction
+    (:func:`mvtk.modal.merge_frf`: one file per reference, or per response group).
 
     ``options`` are reader options (:func:`mvtk.io.read` keywords) applied to every file.
     """
-    import numpy as np
-    import xarray as xr
-
     from .. import io
-    from ..errors import DimensionError
-    from ..modal._frf import as_frf_matrix
+    from ..modal._frf import as_frf_matrix, merge_frf
 
-    mats = []
-    for p in paths:
-        mats.append((p, as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)),
-                                      frf_type=frf_type)))
-    if len(mats) == 1:
-        return mats[0][1]
-    f0 = mats[0][1]["frequency"].values
-    nref = mats[0][1].sizes["reference"]
-    parts = []
-    for p, h in mats:
-        f = h["frequency"].values
-        if f.shape != f0.shape or not np.allclose(f, f0) or h.sizes["reference"] != nref:
-            raise DimensionError(
-                f"{p}: {h.sizes['reference']} reference(s) x {f.size} lines up to "
-                f"{f[-1]:g} Hz; expected the {nref} reference(s) and {f0.size} lines of "
-                f"{mats[0][0]}"
-            )
-        names = [str(r) for r in h["response"].values]
-        if len(mats) > 1:
-            names = [f"{Path(p).stem}:{r}" if r in ("", "reference") or int(n) < 0 else r
-                     for r, n in zip(names, h["node"].values)]
-        parts.append(h.assign_coords(response=names, reference=mats[0][1]["reference"].values,
-                                     reference_node=mats[0][1]["reference_node"],
-                                     reference_direction=mats[0][1]["reference_direction"],
-                                     reference_quantity=mats[0][1]["reference_quantity"],
-                                     reference_units=mats[0][1]["reference_units"],
-                                     frequency=f0))
-    out = xr.concat(parts, dim="response", coords="minimal", compat="override",
-                    combine_attrs="override")
-    return as_frf_matrix(out)
+    mats = [as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)), frf_type=frf_type)
+            for p in paths]
+    return merge_frf(mats, [Path(p).name for p in paths])
 
 
 def _identify(args):
     import numpy as np
 
     from .. import io
-    from ..modal._frf import frf_matrix
+    from ..modal._frf import frf_of_sets
     from ..modal._identify import identify
     from ..modal._ssi import identify_output_only
     from ._common import reader_options
@@ -128,9 +101,10 @@ def _identify(args):
                                                             th["quantity"].values}
         if has_force or args.reference is not None:
             sets = [first] + [io.read(p, **options) for p in args.files[1:]]
-            ref = args.reference if args.reference is not None else {"quantity": "force"}
-            h = frf_matrix(sets, ref, excitation="impact" if args.impact else args.excitation,
-                           nperseg=args.nperseg)
+            # the study's path: a roving hammer is turned by reciprocity
+            h = frf_of_sets(sets, args.reference,
+                            excitation="impact" if args.impact else args.excitation,
+                            nperseg=args.nperseg)
             return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
         ssi_orders = range(2, 61, 2) if args.orders is None else range(2, args.orders + 1, 2)
         return identify_output_only(first, args.fmin, args.fmax, orders=ssi_orders,
@@ -164,6 +138,9 @@ def run(args: argparse.Namespace) -> int:
                "modes": json.loads(table.to_json(orient="records")),
                "frf_correlation": (None if modes.correlation is None
                                    else modes.correlation.attrs["overall"])}
+        if modes.frf is not None and modes.frf.attrs.get("set_quality"):
+            out["set_quality"] = json.loads(modes.frf.attrs["set_quality"])
+            out["window_policy"] = modes.frf.attrs.get("window_policy", "")
         sys.stdout.write(json.dumps(out) + "\n")
         return 0
     sys.stdout.write(f"{modes.method}: {modes.n_modes} mode(s) in "

@@ -67,7 +67,8 @@ def write(ds, path: str | os.PathLike) -> Path:
     ----------
     ds : xarray.Dataset or xarray.DataArray
         Must pass :func:`mvtk.io.validate`. A DataArray is stored as variable
-        ``"time_history"``.
+        ``"frf"`` when its dims are ``("response", "reference", "frequency")`` (an FRF
+        matrix, read back by :func:`mvtk.modal.as_frf_matrix`), else ``"time_history"``.
     path : str or path-like
         Output file (``.nc`` recommended); overwritten if it exists.
 
@@ -84,7 +85,9 @@ def write(ds, path: str | os.PathLike) -> Path:
         ``ds`` breaks the mvtk conventions (see :func:`mvtk.io.validate`).
     """
     if isinstance(ds, xr.DataArray):
-        ds = ds.to_dataset(name="time_history")
+        # an FRF matrix stays an FRF matrix (variable "frf"), anything else is a record
+        frf = set(ds.dims) == {"response", "reference", "frequency"}
+        ds = ds.to_dataset(name="frf" if frf else "time_history")
     if not isinstance(ds, xr.Dataset):
         raise ParameterError(
             f"write: expected an xarray.Dataset or DataArray, got {type(ds).__name__}"
