@@ -53,7 +53,7 @@ from ._modal import (
     static_solve,
 )
 from ._model import DOF_NAMES, FEModel
-from ._nastran import read_nastran
+from ._nastran import read_bulk_cards, read_nastran
 from ._op4 import Op4Matrix, read_op4
 from ._piezo import (
     PiezoPatch,
@@ -143,6 +143,7 @@ __all__ = [
     "write_uff",
     "read_matrices",
     "AffineModel",
+    "read_bulk_cards",
     "read_nastran",
     "read_op4",
     "Op4Matrix",

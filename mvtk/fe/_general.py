@@ -483,6 +483,37 @@ def _constraint_matrix(nodes: np.ndarray, links: Sequence[RigidLink]) -> tuple[
     return C, dependent
 
 
+def _frame_matrix(n_nodes: int, node_frames: Mapping[int, Any] | None,
+                  dependent: np.ndarray) -> sp.csr_matrix | None:
+    """Block-diagonal map from node-frame DOFs to global DOFs (None without frames)."""
+    if not node_frames:
+        return None
+    framed = np.zeros(6 * n_nodes, dtype=bool)
+    rows, cols, vals = [], [], []
+    for n, R in node_frames.items():
+        n = int(n)
+        if not 0 <= n < n_nodes:
+            raise ParameterError(f"node_frames: node {n} outside 0..{n_nodes - 1}")
+        R = np.asarray(R, dtype=float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+            raise ParameterError(f"node_frames: the frame of node {n} must be a (3, 3) "
+                                 f"orthonormal matrix (rows = axes), got {R!r}")
+        if np.any(dependent[6 * n:6 * n + 6]):
+            raise ParameterError(f"node {n} has a displacement frame and is dependent in a "
+                                 "rigid link; give it global axes")
+        framed[6 * n:6 * n + 6] = True
+        for off in (0, 3):  # u_global = R' u_local for translations and rotations
+            r, c = np.meshgrid(6 * n + off + np.arange(3), 6 * n + off + np.arange(3),
+                               indexing="ij")
+            rows.append(r.ravel())
+            cols.append(c.ravel())
+            vals.append(R.T.ravel())
+    plain = np.flatnonzero(~framed)
+    r, c, v = (np.concatenate([p] + a) for p, a in ((plain, rows), (plain, cols),
+                                                     (np.ones(len(plain)), vals)))
+    return sp.csr_matrix((v, (r, c)), shape=(6 * n_nodes, 6 * n_nodes))
+
+
 def assemble_model(
     nodes: np.ndarray,
     members: Sequence[ShellSet | BeamSet | PointMass | Spring | RigidLink],
@@ -493,6 +524,7 @@ def assemble_model(
     drill_factor: float = DRILL_FACTOR,
     name: str = "",
     meta: Mapping[str, Any] | None = None,
+    node_frames: Mapping[int, Any] | None = None,
 ) -> FEModel:
     """Assemble a general 3-D model of shells, beams, masses, springs and rigid links.
 
@@ -512,6 +544,14 @@ def assemble_model(
         Shell drilling penalty, see :mod:`mvtk.fe._shell`.
     name : str
     meta : mapping, optional
+    node_frames : mapping of node index to (3, 3) array, optional
+        Displacement frames: the rows are the unit axes (in global coordinates) in which
+        that node's six DOFs are measured (Nastran's GRID ``CD``). Supports, the
+        components of springs at that node and the model's DOFs of that node
+        (``dof_component``) refer to these axes: a support ``["ux"]`` on a node whose
+        frame is rotated is a skewed roller, ``["ux"]`` in a cylindrical frame a radial
+        support. Point masses and element matrices stay global; :meth:`FEModel.expand`
+        returns global components. Nodes with a frame cannot be dependent in a rigid link.
 
     Returns
     -------
@@ -596,9 +636,10 @@ def assemble_model(
         raise ParameterError(f"DOF {DOF_NAMES[g % 6]} of node {g // 6} is both supported and "
                              "dependent in a rigid link; support the independent node instead")
     keep = np.flatnonzero(~fixed & ~dependent)
-    # with rigid links: assemble on all DOFs, then K = T' K_full T; without: directly on
-    # the kept DOFs (entries on supported DOFs are dropped by the sparsity pattern)
-    if links:
+    frames = _frame_matrix(n_nodes, node_frames, dependent)
+    # with rigid links or frames: assemble on all DOFs, then K = T' K_full T; without:
+    # directly on the kept DOFs (entries on supported DOFs are dropped by the pattern)
+    if links or frames is not None:
         index, n_idx = np.arange(n_all), n_all
     else:
         index = np.full(n_all, -1, dtype=np.int64)
@@ -657,7 +698,11 @@ def assemble_model(
         elif isinstance(mbr, Spring):
             nn = [mbr.node_a] if mbr.node_b is None else [mbr.node_a, mbr.node_b]
             dofs = (6 * np.asarray(nn)[:, None] + np.arange(6)).ravel()
-            K_parts.append(assemble_element_matrices(sym(mbr.matrix()[None]), dofs[None],
+            ke = mbr.matrix()
+            if frames is not None:  # spring components are those of the node frames
+                S = frames[dofs][:, dofs].toarray()
+                ke = S @ ke @ S.T
+            K_parts.append(assemble_element_matrices(sym(ke[None]), dofs[None],
                                                      index, n_idx))
 
     def total(parts):
@@ -667,8 +712,8 @@ def assemble_model(
         return out.tocsr()
 
     K, M = total(K_parts), total(M_parts)
-    if links:
-        T = C[:, keep].tocsc()
+    if links or frames is not None:
+        T = (C @ frames if frames is not None else C)[:, keep].tocsc()
         Kr = (T.T @ K @ T).tocsr()
         Mr = (T.T @ M @ T).tocsr()
     else:
@@ -684,7 +729,7 @@ def assemble_model(
         Kr, Mr, keep = Kr[sel][:, sel], Mr[sel][:, sel], keep[sel]
         if T is not None:
             T = T[:, sel]
-    if links:  # T' K T is symmetric to round-off only
+    if links or frames is not None:  # T' K T is symmetric to round-off only
         Kr = ((Kr + Kr.T) * 0.5).tocsr()
         Mr = ((Mr + Mr.T) * 0.5).tocsr()
     elements = {k: np.concatenate(v) for k, v in conn.items() if v}
@@ -692,7 +737,9 @@ def assemble_model(
                 "recovery": T.tocsr() if T is not None else None,
                 "supports": dict(supports or {}), "members": tuple(members),
                 "shell_groups": shell_groups, "beam_groups": beam_groups,
-                "drill_factor": drill_factor}
+                "drill_factor": drill_factor,
+                "node_frames": {int(k): np.asarray(v, float) for k, v in
+                                (node_frames or {}).items()}}
     out_meta.update(meta or {})
     return FEModel(nodes=nodes, M=Mr, K=Kr, dof_node=keep // 6, dof_component=keep % 6,
                    node_sets=node_sets, elements=elements, name=name, meta=out_meta,
