@@ -19,6 +19,15 @@ from ._general import (
     support_dofs,
 )
 from ._laminate import Laminate
+from ._loads import (
+    StaticSolution,
+    gravity_load,
+    gravity_nodal,
+    nodal_load,
+    pressure_load,
+    pressure_nodal,
+    static_solution,
+)
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._matrices import read_matrices
 from ._mesh import (
@@ -144,6 +153,13 @@ __all__ = [
     "read_matrices",
     "AffineModel",
     "read_bulk_cards",
+    "StaticSolution",
+    "gravity_load",
+    "gravity_nodal",
+    "nodal_load",
+    "pressure_load",
+    "pressure_nodal",
+    "static_solution",
     "read_nastran",
     "read_op4",
     "Op4Matrix",
