@@ -312,3 +312,37 @@ def test_cylindrical_and_spherical_grids_and_radial_cd(tmp_path):
     w2 = scipy.linalg.eigh(m.K.toarray(), m.M.toarray(), eigvals_only=True)
     f = np.sqrt(w2[0]) / (2 * np.pi)
     assert f == pytest.approx(np.sqrt(100.0 / 4.0) / (2 * np.pi), rel=1e-12)
+
+
+def test_ring_on_radial_springs_in_a_cylindrical_system(tmp_path):
+    """A thin ring of CBARs written in a CORD2C (GRID CP = CD = cylindrical), elastic
+    radial supports CELAS2 C1 = 1 (radial) at every grid, out-of-plane motion fixed by
+    SPC1 345 (uz, r_r, r_theta). Closed form (Rayleigh, inextensional modes of a ring on
+    a radial foundation k_f per length; k_f = 0 is Hoppe's ring, Blevins 1979 table 9-2):
+    omega_n^2 = (E I n^2 (n^2 - 1)^2 / R^4 + k_f n^2) / (rho A (n^2 + 1));
+    n = 1 is the rigid translation on the springs, k_f / (2 rho A)."""
+    R, N, b = 0.5, 120, 0.01
+    E, rho = 2.0e11, 7800.0
+    A, I = b * b, b**4 / 12
+    kf = 2.0e4  # N/m per m of ring
+    k = kf * 2 * np.pi * R / N
+    lines = ["BEGIN BULK\n", "CORD2C,7,0,1.,2.,3.,1.,2.,4.,+\n+,2.,2.,3.\n"]
+    lines += [f"GRID,{i + 1},7,{R},{360.0 * i / N:.17g},0.,7\n" for i in range(N)]
+    lines += [f"CBAR,{i + 1},1,{i + 1},{(i + 1) % N + 1},0.,0.,1.\n" for i in range(N)]
+    lines += [f"CELAS2,{1000 + i},{k:.17g},{i + 1},1\n" for i in range(N)]
+    lines.append(f"PBARL,1,2,,BAR\n,{b},{b}\nMAT1,2,{E:.6g},,0.3,{rho}\n")
+    lines.append(f"SPC1,1,345,1,THRU,{N}\n")
+    p = tmp_path / "ring.bdf"
+    p.write_text("".join(lines))
+    model = read_nastran(p)
+    f = modal_analysis(model, 7, sigma=-1.0).fn_hz
+
+    def closed(n):
+        w2 = (E * I * n**2 * (n**2 - 1) ** 2 / R**4 + kf * n**2) / (rho * A * (n**2 + 1))
+        return np.sqrt(w2) / (2 * np.pi)
+
+    assert f[0] < 1e-3  # rigid rotation about the ring axis: radial springs leave it free
+    # n = 1 exact up to the extensional coupling, O(k_f R^2 / (E A)) = 2.5e-4
+    np.testing.assert_allclose(f[1:3], closed(1), rtol=1e-4)
+    np.testing.assert_allclose(f[3:5], closed(2), rtol=2e-3)
+    np.testing.assert_allclose(f[5:7], closed(3), rtol=2e-3)
