@@ -8,6 +8,7 @@ from ._assembly import (
     sparsity_pattern,
 )
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
+from ._frames import CoordinateSystem
 from ._general import (
     GENERAL_SUPPORTS,
     BeamSet,
@@ -91,6 +92,7 @@ from ._solvers import (
     fill_reducing_ordering,
 )
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
+from ._structure_loads import load_vector
 
 __all__ = [
     "DOF_NAMES",
@@ -160,6 +162,8 @@ __all__ = [
     "pressure_load",
     "pressure_nodal",
     "static_solution",
+    "CoordinateSystem",
+    "load_vector",
     "read_nastran",
     "read_op4",
     "Op4Matrix",

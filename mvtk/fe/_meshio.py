@@ -224,6 +224,7 @@ def mesh_model(
     node_sets: Mapping[str, Sequence[int]] | None = None,
     name: str = "",
     meta: Mapping[str, Any] | None = None,
+    node_frames: Mapping[int, Any] | None = None,
 ) -> FEModel:
     """Assemble an imported mesh, one section per element set.
 
@@ -236,7 +237,7 @@ def mesh_model(
         set; line cells outside mapped sets are ignored (they usually only mark edges).
     members : sequence, optional
         Further members (PointMass, Spring, RigidLink) for :func:`mvtk.fe.assemble_model`.
-    supports, node_sets, name, meta
+    supports, node_sets, name, meta, node_frames
         As in :func:`mvtk.fe.assemble_model`; ``node_sets`` add to the mesh's.
 
     Raises
@@ -291,7 +292,7 @@ def mesh_model(
     info = {"mesh_source": mesh.source}
     info.update(meta or {})
     return assemble_model(mesh.nodes, out + list(members), supports=supports, node_sets=sets,
-                          name=name, meta=info)
+                          name=name, meta=info, node_frames=node_frames)
 
 
 def _shapes_full(model: FEModel, result) -> np.ndarray:

@@ -67,7 +67,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import FormatError
+from ..errors import FormatError, ParameterError
+from ._frames import CoordinateSystem
 from ._general import BeamSet, PointMass, RigidLink, ShellSet, Spring, assemble_model
 from ._laminate import Laminate
 from ._materials import IsotropicMaterial, OrthotropicMaterial, Ply
@@ -277,48 +278,7 @@ def _cards_of(lines: list[tuple[str, str]]) -> list[_Card]:
     return cards
 
 
-class _System:
-    """A Nastran coordinate system: origin, axes (rows, in basic) and type R/C/S."""
-
-    def __init__(self, kind: str, origin: np.ndarray, axes: np.ndarray):
-        self.kind, self.origin, self.axes = kind, origin, axes
-
-    def local_xyz(self, x: np.ndarray) -> np.ndarray:
-        """Rectangular local coordinates of system coordinates x (R; r th z; r th ph)."""
-        x = np.asarray(x, dtype=float)
-        if self.kind == "R":
-            return x
-        if self.kind == "C":
-            t = np.radians(x[1])
-            return np.array([x[0] * np.cos(t), x[0] * np.sin(t), x[2]])
-        t, p = np.radians(x[1]), np.radians(x[2])
-        return x[0] * np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
-
-    def to_basic(self, x: np.ndarray) -> np.ndarray:
-        """Basic coordinates of a point given in this system's coordinates."""
-        return self.origin + self.axes.T @ self.local_xyz(x)
-
-    def axes_at(self, p: np.ndarray) -> np.ndarray:
-        """Unit axes (rows, in basic) of the system at basic point p: (x, y, z),
-        (r, theta, z) or (r, theta, phi)."""
-        if self.kind == "R":
-            return self.axes
-        q = self.axes @ (np.asarray(p, float) - self.origin)
-        if self.kind == "C":
-            t = np.arctan2(q[1], q[0])
-            loc = np.array([[np.cos(t), np.sin(t), 0.0], [-np.sin(t), np.cos(t), 0.0],
-                            [0.0, 0.0, 1.0]])
-        else:
-            p_ = np.arctan2(q[1], q[0])
-            t = np.arctan2(np.hypot(q[0], q[1]), q[2])
-            loc = np.array([
-                [np.sin(t) * np.cos(p_), np.sin(t) * np.sin(p_), np.cos(t)],
-                [np.cos(t) * np.cos(p_), np.cos(t) * np.sin(p_), -np.sin(t)],
-                [-np.sin(p_), np.cos(p_), 0.0]])
-        return loc @ self.axes
-
-
-def _frames(cards: dict[str, list[_Card]]) -> dict[int, _System]:
+def _frames(cards: dict[str, list[_Card]]) -> dict[int, CoordinateSystem]:
     """The CORD2R/C/S systems (chains through RID resolved)."""
     raw: dict[int, _Card] = {}
     for name in ("CORD2R", "CORD2C", "CORD2S"):
@@ -327,9 +287,9 @@ def _frames(cards: dict[str, list[_Card]]) -> dict[int, _System]:
             if cid in raw or cid == 0:
                 raise FormatError(f"{c.where}: coordinate system {cid} defined twice (or 0)")
             raw[cid] = c
-    out: dict[int, _System] = {0: _System("R", np.zeros(3), np.eye(3))}
+    out: dict[int, CoordinateSystem] = {0: CoordinateSystem("R", np.zeros(3), np.eye(3))}
 
-    def get(cid: int, depth: int = 0) -> _System:
+    def get(cid: int, depth: int = 0) -> CoordinateSystem:
         if cid in out:
             return out[cid]
         if cid not in raw or depth > 20:
@@ -337,15 +297,12 @@ def _frames(cards: dict[str, list[_Card]]) -> dict[int, _System]:
                               "the chain of reference systems is circular)")
         c = raw[cid]
         ref = get(c.int(1, 0), depth + 1)
-        a, b, cc = (ref.to_basic(np.array([c.real(k + j, 0.0) for j in range(3)]))
+        a, b, cc = (ref.to_global(np.array([c.real(k + j, 0.0) for j in range(3)]))
                     for k in (2, 5, 8))
-        ez = b - a
-        ey = np.cross(ez, cc - a)
-        if np.linalg.norm(ez) == 0 or np.linalg.norm(ey) == 0:
-            raise FormatError(f"{c.where}: {c.name} {cid}: points A, B, C are collinear")
-        ez /= np.linalg.norm(ez)
-        ey /= np.linalg.norm(ey)
-        out[cid] = _System(c.name[-1], a, np.stack([np.cross(ey, ez), ey, ez]))
+        try:
+            out[cid] = CoordinateSystem.from_points(c.name[-1], a, b, cc)
+        except ParameterError as err:
+            raise FormatError(f"{c.where}: {c.name} {cid}: {err}") from err
         return out[cid]
 
     for cid in raw:
@@ -640,7 +597,7 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
                              "ignored": dict(sorted(ignored.items())), "damping": {}}
     systems = _frames(cards)
 
-    def system(cid: int, where: str) -> _System:
+    def system(cid: int, where: str) -> CoordinateSystem:
         if cid not in systems:
             raise FormatError(f"{where}: coordinate system {cid} is not defined "
                               "(CORD2R/C/S)")
@@ -651,7 +608,7 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
         gid, cp = c.int(0, what="ID"), c.int(1, 0, "CP")
         if c.int(7, 0, "SEID") != 0:
             raise FormatError(f"{c.where}: GRID {gid}: superelement SEID is not supported")
-        xyz.append(system(cp, c.where).to_basic(np.array([c.real(k, 0.0, f"X{k - 1}")
+        xyz.append(system(cp, c.where).to_global(np.array([c.real(k, 0.0, f"X{k - 1}")
                                                           for k in (2, 3, 4)])))
         ids.append(gid)
         cds.append((c.int(5, 0, "CD"), c.where))

@@ -118,6 +118,7 @@ from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, P
 from ._mesh import Patch
 from ._model import DOF_NAMES, FEModel
 from ._plate import SpringSupport, plate_model
+from ._structure_loads import coordinate_systems, load_cases, node_frames
 
 __all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "constrain_model"]
 
@@ -325,7 +326,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
     s = copy.deepcopy(dict(structure))
     known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points",
-             "sections", "masses", "rigid_links"}
+             "sections", "masses", "rigid_links", "coordinate_systems", "loads"}
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
@@ -340,7 +341,9 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     if kind == "mesh":
         return _build_mesh(s, st, materials, source)
     for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
-                     ("rigid_links", "for imported meshes")):
+                     ("rigid_links", "for imported meshes"),
+                     ("coordinate_systems", "for imported meshes and Nastran decks"),
+                     ("loads", "for imported meshes and Nastran decks")):
         if key in s:
             raise ConfigError(f"{key}: not applicable to structure.type = {kind!r} ({why}, "
                               "structure.type = 'mesh')")
@@ -686,10 +689,12 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"),
+    _check_keys(b, "boundary", ("supports", "springs", "frames"),
                 {k: "for the built-in plate/beam; use boundary.supports on a node set"
                  for k in ("clamp", "clamp_stiffness", "clamp_translational_stiffness",
                            "edges")})
+    systems = coordinate_systems(s)
+    frames = node_frames(b, systems, mesh.nodes, node_sets)
     for sp_ in _springs(b, allow_per_length=False):
         set_name, dof, kval, _ = sp_
         if set_name not in node_sets:
@@ -700,12 +705,21 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if source is not None:
         meta["source"] = source
     try:
-        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
-                          members=members, supports=_supports(b), node_sets=node_sets,
-                          name=str(s.get("name", "")), meta=meta)
+        model = mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                           members=members, supports=_supports(b), node_sets=node_sets,
+                           name=str(s.get("name", "")), meta=meta,
+                           node_frames=frames or None)
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
+    return _with_loads(s, model, systems)
+
+
+def _with_loads(s: Mapping, model: FEModel, systems) -> FEModel:
+    """The model with ``meta["load_cases"]`` from ``[[loads]]`` (when given)."""
+    if "loads" not in s:
+        return model
+    return replace(model, meta=dict(model.meta, load_cases=load_cases(s, model, systems)))
 
 
 def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:
@@ -724,7 +738,9 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"))
+    _check_keys(b, "boundary", ("supports", "springs"),
+                {"frames": "a Nastran deck gives node frames by GRID CD"})
+    systems = coordinate_systems(s)
     try:
         model = read_nastran(path, spc_id=spc, name=str(s.get("name", "")))
     except MvtkError as err:
@@ -740,7 +756,8 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     if source is not None:
         meta["source"] = source
     model = replace(model, node_sets=sets, meta=meta)
-    return constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    model = constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    return _with_loads(s, model, systems)
 
 
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -314,17 +316,14 @@ def test_cylindrical_and_spherical_grids_and_radial_cd(tmp_path):
     assert f == pytest.approx(np.sqrt(100.0 / 4.0) / (2 * np.pi), rel=1e-12)
 
 
-def test_ring_on_radial_springs_in_a_cylindrical_system(tmp_path):
-    """A thin ring of CBARs written in a CORD2C (GRID CP = CD = cylindrical), elastic
-    radial supports CELAS2 C1 = 1 (radial) at every grid, out-of-plane motion fixed by
-    SPC1 345 (uz, r_r, r_theta). Closed form (Rayleigh, inextensional modes of a ring on
-    a radial foundation k_f per length; k_f = 0 is Hoppe's ring, Blevins 1979 table 9-2):
-    omega_n^2 = (E I n^2 (n^2 - 1)^2 / R^4 + k_f n^2) / (rho A (n^2 + 1));
-    n = 1 is the rigid translation on the springs, k_f / (2 rho A)."""
-    R, N, b = 0.5, 120, 0.01
-    E, rho = 2.0e11, 7800.0
-    A, I = b * b, b**4 / 12
-    kf = 2.0e4  # N/m per m of ring
+#: Ring of the radial-support tests: radius, CBARs, square side, E, rho, k_f (N/m/m).
+RING = (0.5, 120, 0.01, 2.0e11, 7800.0, 2.0e4)
+
+
+def _ring_deck(folder) -> Path:
+    """The ring as a deck: CORD2C (shifted origin), GRID CP = CD = 7, CBARs, radial
+    CELAS2 springs (C1 = 1), SPC1 345 (uz, r_r, r_theta) on every grid."""
+    R, N, b, E, rho, kf = RING
     k = kf * 2 * np.pi * R / N
     lines = ["BEGIN BULK\n", "CORD2C,7,0,1.,2.,3.,1.,2.,4.,+\n+,2.,2.,3.\n"]
     lines += [f"GRID,{i + 1},7,{R},{360.0 * i / N:.17g},0.,7\n" for i in range(N)]
@@ -332,8 +331,21 @@ def test_ring_on_radial_springs_in_a_cylindrical_system(tmp_path):
     lines += [f"CELAS2,{1000 + i},{k:.17g},{i + 1},1\n" for i in range(N)]
     lines.append(f"PBARL,1,2,,BAR\n,{b},{b}\nMAT1,2,{E:.6g},,0.3,{rho}\n")
     lines.append(f"SPC1,1,345,1,THRU,{N}\n")
-    p = tmp_path / "ring.bdf"
+    p = Path(folder) / "ring.bdf"
     p.write_text("".join(lines))
+    return p
+
+
+def test_ring_on_radial_springs_in_a_cylindrical_system(tmp_path):
+    """A thin ring of CBARs written in a CORD2C (GRID CP = CD = cylindrical), elastic
+    radial supports CELAS2 C1 = 1 (radial) at every grid, out-of-plane motion fixed by
+    SPC1 345 (uz, r_r, r_theta). Closed form (Rayleigh, inextensional modes of a ring on
+    a radial foundation k_f per length; k_f = 0 is Hoppe's ring, Blevins 1979 table 9-2):
+    omega_n^2 = (E I n^2 (n^2 - 1)^2 / R^4 + k_f n^2) / (rho A (n^2 + 1));
+    n = 1 is the rigid translation on the springs, k_f / (2 rho A)."""
+    R, N, b, E, rho, kf = RING
+    A, I = b * b, b**4 / 12
+    p = _ring_deck(tmp_path)
     model = read_nastran(p)
     f = modal_analysis(model, 7, sigma=-1.0).fn_hz
 

@@ -56,7 +56,7 @@ def test_deck_reads_card_for_card_as_pynastran(deck):
         assert (c.int(1, 0), c.int(5, 0), c.text(6)) == (r["cp"], r["cd"], r["ps"])
         x = np.array([c.real(k, 0.0) for k in (2, 3, 4)])
         np.testing.assert_allclose(x, r["xyz"], atol=1e-14)
-        np.testing.assert_allclose(systems[c.int(1, 0)].to_basic(x), r["basic"], atol=1e-12)
+        np.testing.assert_allclose(systems[c.int(1, 0)].to_global(x), r["basic"], atol=1e-12)
     for c in by.get("CONM2", []):
         r = ref["CONM2"][str(c.int(0))]
         assert (c.int(1), c.int(2, 0), c.real(3)) == (r["nid"], r["cid"], r["mass"])
