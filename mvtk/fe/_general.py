@@ -233,12 +233,16 @@ class PointMass:
         the diagonal.
     offset : array_like (3,)
         Vector from the node to the mass centre (m).
+    frame : array_like (3, 3), optional
+        Axes (rows, global components) in which ``inertia`` is given; the global
+        tensor is ``R' J R``. Default: global axes.
     """
 
     node: int
     mass: float
     inertia: Any = (0.0, 0.0, 0.0)
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    frame: Any = None
 
     def matrix(self) -> np.ndarray:
         """6x6 mass matrix at the node (global DOFs)."""
@@ -252,6 +256,12 @@ class PointMass:
                 f"point mass at node {self.node}: inertia must be 3 values or a symmetric "
                 f"positive semi-definite 3x3 matrix, got {self.inertia!r}"
             )
+        if self.frame is not None:
+            R = np.asarray(self.frame, dtype=float)
+            if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+                raise ParameterError(f"point mass at node {self.node}: frame must be an "
+                                     f"orthonormal (3, 3) matrix (rows = axes), got {R!r}")
+            J = R.T @ J @ R
         m = np.zeros((6, 6))
         m[:3, :3] = self.mass * np.eye(3)
         m[3:, 3:] = J

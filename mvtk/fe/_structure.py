@@ -593,8 +593,8 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
             raise ConfigError(f"sections.{name}: expected layers (shell) or shape (beam: "
                               f"{', '.join(_SHAPES)}), got shape={shape!r}")
         dims = _SHAPES[shape]
-        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset")
-                    + dims)
+        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset",
+                                             "shear_factor") + dims)
         mat = d.get("material")
         if mat not in materials:
             raise ConfigError(f"{w}material: {mat!r} is not defined; defined materials: "
@@ -607,6 +607,10 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
                        "generic": secs.generic_section}[shape](materials[mat], **vals)
         except MvtkError as err:
             raise ConfigError(f"sections.{name}: {err}") from err
+        if "shear_factor" in d:  # k of k G A, both bending planes
+            sf = _number(d, "shear_factor", w)
+            GA = materials[mat].G12 * section.EA / materials[mat].E1
+            section = replace(section, kGAz=sf * GA, kGAy=sf * GA)
         out[name] = BeamProperty(section, _vec(d, "orientation", w, [0.0, 0.0, 1.0]),
                                  _vec(d, "offset", w, [0.0, 0.0, 0.0]))
     return out
@@ -669,11 +673,30 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"masses[{i}]"
         if not isinstance(m, Mapping):
             raise ConfigError(f"{w}: expected a table")
-        _check_keys(m, w, ("point", "mass", "inertia", "offset"))
-        members.append(PointMass(one_node(m.get("point"), w + ".point"),
-                                 _number(m, "mass", w + ".", positive=False),
-                                 _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0]),
-                                 _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])))
+        _check_keys(m, w, ("point", "mass", "inertia", "offset", "system"))
+        node_ = one_node(m.get("point"), w + ".point")
+        inertia = m.get("inertia", [0.0, 0.0, 0.0])
+        if isinstance(inertia, list) and len(inertia) == 3 and all(
+                isinstance(r, list) for r in inertia):
+            J = np.array(inertia, dtype=float)  # a full tensor [[Ixx, Ixy, Ixz], ...]
+            if J.shape != (3, 3):
+                raise ConfigError(f"{w}.inertia: expected 3 numbers or a 3 x 3 tensor")
+        else:
+            J = _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0])
+        frame = None
+        if "system" in m:
+            systems_ = coordinate_systems(s)
+            if m["system"] not in systems_:
+                raise ConfigError(f"{w}.system: {m['system']!r} is not defined; defined: "
+                                  f"{sorted(systems_)}")
+            frame = systems_[m["system"]].axes_at(mesh.nodes[node_])
+        try:
+            members.append(PointMass(node_, _number(m, "mass", w + ".", positive=False),
+                                     J, _vec(m, "offset", w + ".", [0.0, 0.0, 0.0]),
+                                     frame))
+            members[-1].matrix()
+        except MvtkError as err:
+            raise ConfigError(f"{w}: {err}") from err
     for i, r in enumerate(s.get("rigid_links", [])):
         w = f"rigid_links[{i}]"
         if not isinstance(r, Mapping):
