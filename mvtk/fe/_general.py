@@ -57,6 +57,7 @@ from ..errors import DimensionError, ParameterError
 from ._assembly import assemble_element_matrices, sparsity_pattern
 from ._beam import BeamSection, _global_matrices, _section_array
 from ._laminate import Laminate
+from ._mitc9 import mitc9_matrices
 from ._model import DOF_NAMES, FEModel
 from ._shell import DRILL_FACTOR
 from ._shell3d import shell_element_matrices, shell_frames
@@ -127,9 +128,10 @@ class ShellSet:
 
     Parameters
     ----------
-    elements : array_like of int, shape (n_el, 3) or (n_el, 4)
-        Node indices: triangles (MITC3) or quadrilaterals (MITC4), counter-clockwise about
-        the intended normal.
+    elements : array_like of int, shape (n_el, 3), (n_el, 4) or (n_el, 9)
+        Node indices: triangles (MITC3), quadrilaterals (MITC4) or nine-node curved
+        quadrilaterals (MITC9, :mod:`mvtk.fe._mitc9`: corners, mid-sides, centre),
+        counter-clockwise about the intended normal.
     section : Laminate
         Layers bottom (-normal side) to top; ply angles from the material axis.
     material_axis : array_like (3,) or (n_el, 3)
@@ -150,9 +152,10 @@ class ShellSet:
 
     def __post_init__(self) -> None:
         el = np.asarray(self.elements, dtype=np.int64)
-        if el.ndim != 2 or el.shape[1] not in (3, 4):
+        if el.ndim != 2 or el.shape[1] not in (3, 4, 9):
             raise DimensionError(
-                f"shell set {self.name!r}: elements must have shape (n, 3) or (n, 4), "
+                f"shell set {self.name!r}: elements must have shape (n, 3) or (n, 4) "
+                "(or (n, 9): MITC9), "
                 f"got {el.shape}"
             )
         if not isinstance(self.section, Laminate):
@@ -493,6 +496,26 @@ def _constraint_matrix(nodes: np.ndarray, links: Sequence[RigidLink]) -> tuple[
     return C, dependent
 
 
+def _directors(nodes: np.ndarray, sets: Sequence[np.ndarray]) -> np.ndarray:
+    """Unit nodal directors of nine-node shells: the average of the surface normals of
+    the elements at each node (zero rows for other nodes)."""
+    out = np.zeros((len(nodes), 3))
+    if not sets:
+        return out
+    from ._mitc9 import NODE_RS, _shape
+
+    for el in sets:
+        x = nodes[el]
+        for i, (r, s) in enumerate(NODE_RS):
+            _, dr, ds = _shape(r, s)
+            n = np.cross(np.einsum("k,ekj->ej", dr, x), np.einsum("k,ekj->ej", ds, x))
+            np.add.at(out, el[:, i], n / np.linalg.norm(n, axis=1)[:, None])
+    norm = np.linalg.norm(out, axis=1)
+    used = norm > 0
+    out[used] /= norm[used, None]
+    return out
+
+
 def _frame_matrix(n_nodes: int, node_frames: Mapping[int, Any] | None,
                   dependent: np.ndarray) -> sp.csr_matrix | None:
     """Block-diagonal map from node-frame DOFs to global DOFs (None without frames)."""
@@ -566,7 +589,8 @@ def assemble_model(
     Returns
     -------
     FEModel
-        ``elements`` holds ``"mitc4"``, ``"mitc3"``, ``"beam2"`` connectivities;
+        ``elements`` holds ``"mitc4"``, ``"mitc3"``, ``"mitc9"``, ``"beam2"``
+        connectivities;
         ``meta["element_sets"]`` maps each member set name to ``(type, indices)`` into
         those arrays; ``meta["unused_dofs"]`` the global DOFs removed for carrying
         neither stiffness nor mass; ``meta["recovery"]`` (with rigid links) the sparse
@@ -582,8 +606,9 @@ def assemble_model(
     for k, v in node_sets.items():
         if v.size and (v.min() < 0 or v.max() >= n_nodes):
             raise ParameterError(f"node set {k!r} refers to nodes outside 0..{n_nodes - 1}")
-    conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "beam2": []}
-    counts = {"mitc4": 0, "mitc3": 0, "beam2": 0}
+    conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "mitc9": [],
+                                         "beam2": []}
+    counts = {"mitc4": 0, "mitc3": 0, "mitc9": 0, "beam2": 0}
     element_sets: dict[str, tuple[str, np.ndarray]] = {}
     links = []
     shell_groups: list = []
@@ -600,9 +625,9 @@ def assemble_model(
                 raise ParameterError(f"{what} set {mbr.name!r}: node index outside "
                                      f"0..{n_nodes - 1}")
             if isinstance(mbr, ShellSet):
-                kind = "mitc4" if el.shape[1] == 4 else "mitc3"
+                kind = {3: "mitc3", 4: "mitc4", 9: "mitc9"}[el.shape[1]]
                 for start in range(0, len(el), _CHUNK):
-                    c = el[start:start + _CHUNK]
+                    c = el[start:start + _CHUNK, :min(el.shape[1], 4)]
                     np.add.at(normals, c.ravel(),
                               np.repeat(shell_frames(nodes[c])[:, 2], c.shape[1], axis=0))
                 shell_groups.append((kind, counts[kind] + np.arange(len(el)), mbr.laminate(),
@@ -662,6 +687,8 @@ def assemble_model(
         return 0.5 * (A + np.swapaxes(A, 1, 2))
 
     K_parts, M_parts = [], []
+    directors = _directors(nodes, [m.elements for m in members
+                                   if isinstance(m, ShellSet) and m.elements.shape[1] == 9])
     for mbr in members:
         if isinstance(mbr, ShellSet):
             el = mbr.elements
@@ -675,10 +702,16 @@ def assemble_model(
             # in chunks: element matrices of large meshes never exist all at once
             for start in range(0, len(el), _CHUNK):
                 c = el[start:start + _CHUNK]
-                Ke, Me = shell_element_matrices(
-                    nodes[c], lam.ABD[None], lam.H[None],
-                    np.array([[lam.I0, lam.I1, lam.I2]]), np.full(len(c), lam.thickness),
-                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
+                ax = axis[start:start + _CHUNK] if axis.ndim == 2 else axis
+                if el.shape[1] == 9:
+                    Ke, Me = mitc9_matrices(nodes[c], directors[c], lam.ABD, lam.H,
+                                            (lam.I0, lam.I1, lam.I2), lam.thickness, ax,
+                                            drill_factor)
+                else:
+                    Ke, Me = shell_element_matrices(
+                        nodes[c], lam.ABD[None], lam.H[None],
+                        np.array([[lam.I0, lam.I1, lam.I2]]), np.full(len(c), lam.thickness),
+                        ax, drill_factor)
                 pos = pattern.position[start * nd * nd:(start + len(c)) * nd * nd]
                 dk += np.bincount(pos, weights=sym(Ke).ravel(), minlength=pattern.nnz + 1)
                 dm += np.bincount(pos, weights=sym(Me).ravel(), minlength=pattern.nnz + 1)

@@ -12,7 +12,8 @@ as it should:
   translation ``a`` (m/s^2) of every node;
 - :func:`pressure_load`: uniform pressure on shell elements, consistent for their
   bilinear (MITC4) or linear (MITC3) geometry, ``f_i = p int N_i n dA`` along the
-  element normal (right-handed with the node order); no follower effect;
+  element normal (right-handed with the node order); no follower effect; nine-node
+  shells with their quadratic geometry (3 x 3 Gauss points);
 - :func:`static_solution`: displacements, and the reactions at the supported DOFs
   ``R = K_full u - f_nodal``.
 """
@@ -135,6 +136,16 @@ def pressure_nodal(model: FEModel, pressure: float, element_set: str | None = No
             n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]) / 2  # area * normal
             for k in range(3):
                 np.add.at(out[:, :3], el[:, k], pressure * n / 3)
+            continue
+        if el.shape[1] == 9:
+            from ._mitc9 import _GP, _GW, _shape
+
+            for a, r in enumerate(_GP):
+                for b, s in enumerate(_GP):
+                    N, dr, ds = _shape(r, s)
+                    n = np.cross(np.einsum("k,ekj->ej", dr, x), np.einsum("k,ekj->ej", ds, x))
+                    for k in range(9):
+                        np.add.at(out[:, :3], el[:, k], pressure * _GW[a] * _GW[b] * N[k] * n)
             continue
         for xi, eta in ((-g, -g), (g, -g), (g, g), (-g, g)):
             N = 0.25 * np.array([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),

@@ -124,24 +124,41 @@ def _line_lengths(model: FEModel, nodes: np.ndarray, where: str) -> np.ndarray:
     """Half the length of every element edge with both ends in ``nodes``, per node."""
     inset = np.zeros(model.n_nodes, dtype=bool)
     inset[nodes] = True
-    edges = []
+    edges, quad_edges = [], []
     for m in model.meta.get("members", ()):
-        if isinstance(m, ShellSet):
+        if isinstance(m, ShellSet) and m.elements.shape[1] == 9:  # corner, mid, corner
+            el = m.elements
+            quad_edges += [el[:, [j, 4 + j, (j + 1) % 4]] for j in range(4)]
+        elif isinstance(m, ShellSet):
             el = m.elements
             k = el.shape[1]
             edges += [el[:, [j, (j + 1) % k]] for j in range(k)]
         elif isinstance(m, BeamSet):
             edges.append(m.elements)
-    if not edges:
+    if not edges and not quad_edges:
         raise ConfigError(f"{where}: the model has no element edges")
-    e = np.sort(np.concatenate(edges), axis=1)
-    e = np.unique(e[inset[e[:, 0]] & inset[e[:, 1]]], axis=0)
-    if not len(e):
-        raise ConfigError(f"{where}: no element edge joins two nodes of the set")
-    length = np.linalg.norm(model.nodes[e[:, 1]] - model.nodes[e[:, 0]], axis=1)
     out = np.zeros(model.n_nodes)
-    np.add.at(out, e[:, 0], length / 2)
-    np.add.at(out, e[:, 1], length / 2)
+    found = False
+    if edges:
+        e = np.sort(np.concatenate(edges), axis=1)
+        e = np.unique(e[inset[e[:, 0]] & inset[e[:, 1]]], axis=0)
+        length = np.linalg.norm(model.nodes[e[:, 1]] - model.nodes[e[:, 0]], axis=1)
+        np.add.at(out, e[:, 0], length / 2)
+        np.add.at(out, e[:, 1], length / 2)
+        found = len(e) > 0
+    if quad_edges:  # consistent for a quadratic edge: L/6, 4 L/6, L/6
+        q = np.concatenate(quad_edges)
+        q = q[inset[q].all(axis=1)]
+        q[:, [0, 2]] = np.sort(q[:, [0, 2]], axis=1)
+        q = np.unique(q, axis=0)
+        x = model.nodes
+        length = (np.linalg.norm(x[q[:, 1]] - x[q[:, 0]], axis=1)
+                  + np.linalg.norm(x[q[:, 2]] - x[q[:, 1]], axis=1))
+        for j, share in enumerate((1 / 6, 4 / 6, 1 / 6)):
+            np.add.at(out, q[:, j], share * length)
+        found = found or len(q) > 0
+    if not found:
+        raise ConfigError(f"{where}: no element edge joins two nodes of the set")
     return out
 
 
