@@ -5,7 +5,8 @@ Import
 :func:`read_mesh` reads any format meshio reads (Gmsh ``.msh``, Abaqus ``.inp``,
 VTK/VTU, MED, ...) into an :class:`ImportedMesh`: node coordinates, first-order cells
 (``tri3``, ``quad4``, ``line2``, ``vertex``), nine-node quadrilaterals (``quad9``: Gmsh
-second order, Abaqus S9R5; MITC9 shells) and named sets:
+second order, Abaqus S9R5; MITC9 shells; three-node lines become two two-node beams)
+and named sets:
 
 - Gmsh physical groups (``$PhysicalNames``) and meshio ``cell_sets`` (Abaqus ``*ELSET``,
   MED families) become **element sets**; each element set also defines a **node set**
@@ -48,7 +49,7 @@ __all__ = ["ImportedMesh", "read_mesh", "mesh_model", "write_vtu", "write_xdmf",
            "ShellSection", "BeamProperty"]
 
 _KINDS = {"triangle": "tri3", "quad": "quad4", "quad9": "quad9", "line": "line2",
-          "vertex": "vertex"}
+          "line3": "line2", "vertex": "vertex"}
 _MESHIO_NAME = {v: k for k, v in _KINDS.items()}
 
 
@@ -133,11 +134,14 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
     if nodes.shape[1] == 2:
         nodes = np.column_stack([nodes, np.zeros(len(nodes))])
     where = f"mesh {source!r}" if source else "mesh"
-    block_kind, block_offset = [], []
+    block_kind, block_offset, block_split = [], [], []
     cells: dict[str, list[np.ndarray]] = {}
     counts: dict[str, int] = {}
     for block in m.cells:
         kind = _KINDS.get(block.type)
+        split = block.type == "line3"  # three-node lines: two two-node beams each
+        if split:
+            kind = "line2"
         if kind is None:
             found = sorted({b.type for b in m.cells})
             raise FormatError(
@@ -148,7 +152,10 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
                 "Mesh.SecondOrderIncomplete = 0, recombined), without volume cells"
             )
         data = np.asarray(block.data, dtype=np.int64)
+        if split:  # meshio line3: end, end, middle
+            data = np.stack([data[:, [0, 2]], data[:, [2, 1]]], axis=1).reshape(-1, 2)
         block_kind.append(kind)
+        block_split.append(split)
         block_offset.append(counts.get(kind, 0))
         cells.setdefault(kind, []).append(data)
         counts[kind] = counts.get(kind, 0) + len(data)
@@ -162,8 +169,11 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
         if len(local) == 0:
             return
         kind = block_kind[b]
+        local = np.asarray(local, dtype=np.int64)
+        if block_split[b]:
+            local = np.stack([2 * local, 2 * local + 1], axis=1).ravel()
         element_sets.setdefault(name, {}).setdefault(kind, []).append(
-            block_offset[b] + np.asarray(local, dtype=np.int64))
+            block_offset[b] + local)
 
     for name, per_block in (m.cell_sets or {}).items():
         if name.startswith("gmsh:"):
