@@ -128,33 +128,43 @@ def pressure_nodal(model: FEModel, pressure: float, element_set: str | None = No
             names = [m.name for m in _members(model) if isinstance(m, ShellSet)]
             raise ParameterError(f"no shell set {element_set!r}; shell sets: {names}")
     out = np.zeros((model.n_nodes, 6))
-    g = 1.0 / np.sqrt(3.0)
     for m in shells:
-        el = m.elements
-        x = model.nodes[el]
-        if el.shape[1] == 3:
-            n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]) / 2  # area * normal
-            for k in range(3):
-                np.add.at(out[:, :3], el[:, k], pressure * n / 3)
-            continue
-        if el.shape[1] == 9:
-            from ._mitc9 import _GP, _GW, _shape
+        out[:, :3] += element_pressure(model.nodes, m.elements, pressure)
+    return out
 
-            for a, r in enumerate(_GP):
-                for b, s in enumerate(_GP):
-                    N, dr, ds = _shape(r, s)
-                    n = np.cross(np.einsum("k,ekj->ej", dr, x), np.einsum("k,ekj->ej", ds, x))
-                    for k in range(9):
-                        np.add.at(out[:, :3], el[:, k], pressure * _GW[a] * _GW[b] * N[k] * n)
-            continue
-        for xi, eta in ((-g, -g), (g, -g), (g, g), (-g, g)):
-            N = 0.25 * np.array([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
-                                 (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)])
-            dxi = 0.25 * np.array([-(1 - eta), (1 - eta), (1 + eta), -(1 + eta)])
-            deta = 0.25 * np.array([-(1 - xi), -(1 + xi), (1 + xi), (1 - xi)])
-            n = np.cross(np.einsum("k,ekj->ej", dxi, x), np.einsum("k,ekj->ej", deta, x))
-            for k in range(4):
-                np.add.at(out[:, :3], el[:, k], pressure * N[k] * n)
+
+def element_pressure(nodes: np.ndarray, elements: np.ndarray, pressure) -> np.ndarray:
+    """Consistent nodal forces (n_nodes, 3) of a pressure (Pa, scalar or one per element)
+    along the normals of shell elements (n_el, 3 | 4 | 9)."""
+    el = np.asarray(elements, dtype=np.int64)
+    p = np.broadcast_to(np.asarray(pressure, dtype=float), (len(el),))[:, None]
+    out = np.zeros((len(nodes), 3))
+    x = nodes[el]
+    if el.shape[1] == 3:
+        n = np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]) / 2  # area * normal
+        for k in range(3):
+            np.add.at(out, el[:, k], p * n / 3)
+        return out
+    if el.shape[1] == 9:
+        from ._mitc9 import _GP, _GW, _shape
+
+        pts = [(r, s, _GW[a] * _GW[b]) for a, r in enumerate(_GP) for b, s in enumerate(_GP)]
+        shape = _shape
+    else:
+        g = 1.0 / np.sqrt(3.0)
+
+        def shape(xi, eta):
+            return (0.25 * np.array([(1 - xi) * (1 - eta), (1 + xi) * (1 - eta),
+                                     (1 + xi) * (1 + eta), (1 - xi) * (1 + eta)]),
+                    0.25 * np.array([-(1 - eta), (1 - eta), (1 + eta), -(1 + eta)]),
+                    0.25 * np.array([-(1 - xi), -(1 + xi), (1 + xi), (1 - xi)]))
+
+        pts = [(xi, eta, 1.0) for xi, eta in ((-g, -g), (g, -g), (g, g), (-g, g))]
+    for r, s, w in pts:
+        N, dr, ds = shape(r, s)
+        n = np.cross(np.einsum("k,ekj->ej", dr, x), np.einsum("k,ekj->ej", ds, x))
+        for k in range(el.shape[1]):
+            np.add.at(out, el[:, k], p * w * N[k] * n)
     return out
 
 

@@ -54,6 +54,12 @@ Cards and their meaning here (every other card is refused, all listed by name an
   (``spc_id`` or ``SPC =`` in the case control).
 - ``RBE2 EID GN CM GM1 ... [ALPHA]`` (rigid link), ``RBE3 EID - REFGRID 123456 WT1 123
   G1,1 ...`` (weighted interpolation, translations of the independent grids).
+- Static loads, kept as nodal forces in ``meta["load_cases"]`` by set id (``"10"``),
+  the case control's ``LOAD =`` in ``meta["nastran"]["load_id"]``: ``FORCE``/``MOMENT
+  SID G CID F N1 N2 N3`` (the vector in the CID axes at the grid), ``PLOAD2 SID P EIDs |
+  EID1 THRU EID2`` and uniform ``PLOAD4 SID EID P [THRU EID2]`` on CQUAD4/CTRIA3 (along
+  the element normal), ``GRAV SID CID A N1 N2 N3`` (from the consistent mass) and
+  ``LOAD SID S S1 L1 ...``.
 
 """
 
@@ -86,7 +92,8 @@ __all__ = ["read_nastran", "read_bulk_cards"]
 _IGNORED = {"PARAM", "EIGRL", "EIGR", "MDLPRM"}
 _SUPPORTED = {"GRID", "CORD2R", "CORD2C", "CORD2S", "CQUAD4", "CTRIA3", "PSHELL", "PCOMP",
               "MAT1", "MAT8", "CBAR", "CBEAM", "PBAR", "PBARL", "PBEAM", "PBEAML", "CONM2",
-              "CELAS1", "CELAS2", "PELAS", "SPC1", "SPC", "SPCADD", "RBE2", "RBE3"}
+              "CELAS1", "CELAS2", "PELAS", "SPC1", "SPC", "SPCADD", "RBE2", "RBE3",
+              "FORCE", "MOMENT", "GRAV", "PLOAD2", "PLOAD4", "LOAD"}
 _REAL = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+))([+-]\d+)$")
 _INT = re.compile(r"^[+-]?\d+$")
 
@@ -636,6 +643,7 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
     members: list[Any] = []
     node_sets: dict[str, np.ndarray] = {}
     groups: dict[tuple[str, int, float], list[tuple[list[int], np.ndarray]]] = defaultdict(list)
+    shell_nodes: dict[int, list[int]] = {}
     for kind, n in (("CQUAD4", 4), ("CTRIA3", 3)):
         for c in cards.get(kind, []):
             pid = c.int(1, what="PID")
@@ -643,6 +651,7 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
                 raise FormatError(f"{c.where}: {kind} {c.int(0)}: property {pid} is not a "
                                   "PSHELL/PCOMP")
             g = [node(c.int(2 + k, what=f"G{k + 1}"), c.where) for k in range(n)]
+            shell_nodes[c.int(0, what="EID")] = g
             if any(not c.blank(k) and c.real(k, 0.0) != 0.0 for k in range(9, len(c))):
                 raise FormatError(f"{c.where}: {kind} {c.int(0)}: TFLAG and corner "
                                   "thicknesses T1..T4 are not supported")
@@ -795,10 +804,102 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
                            meta={"source": str(path), "nastran": notes},
                            node_frames=node_frames or None)
     sets = {k: v for k, v in model.node_sets.items() if not k.startswith("_spc")}
-    return FEModel(nodes=model.nodes, M=model.M, K=model.K, dof_node=model.dof_node,
-                   dof_component=model.dof_component, node_sets=sets,
-                   elements=model.elements, name=model.name, meta=model.meta,
-                   node_ids=model.node_ids)
+    model = FEModel(nodes=model.nodes, M=model.M, K=model.K, dof_node=model.dof_node,
+                    dof_component=model.dof_component, node_sets=sets,
+                    elements=model.elements, name=model.name, meta=model.meta,
+                    node_ids=model.node_ids)
+    cases = _load_cases(cards, model, node, system, shell_nodes)
+    if cases:
+        notes["load_id"] = _case_load(case)
+        model = replace(model, meta=dict(model.meta, load_cases=cases))
+    return model
+
+
+def _case_load(case: list[str]) -> int | None:
+    """The LOAD set of the case control when it names exactly one."""
+    found = {int(m.group(1)) for line in case
+             if (m := re.match(r"^\s*LOAD\s*=\s*(\d+)\s*$", line.split("$")[0], re.I))}
+    return found.pop() if len(found) == 1 else None
+
+
+def _load_cases(cards, model: FEModel, node, system, shell_nodes) -> dict[str, np.ndarray]:
+    """Static load sets ``{"<sid>": nodal forces (n_nodes, 6)}`` of FORCE, MOMENT,
+    PLOAD2, PLOAD4 (uniform), GRAV and their LOAD combinations."""
+    from ._loads import element_pressure, gravity_nodal
+
+    n = model.n_nodes
+    sets: dict[int, np.ndarray] = {}
+
+    def get(sid: int) -> np.ndarray:
+        return sets.setdefault(sid, np.zeros((n, 6)))
+
+    for c in cards.get("FORCE", []) + cards.get("MOMENT", []):
+        sid, g = c.int(0, what="SID"), node(c.int(1, what="G"), c.where)
+        v = c.real(3, what="F") * np.array([c.real(k, 0.0, "N") for k in (4, 5, 6)])
+        R = system(c.int(2, 0, "CID"), c.where).axes_at(model.nodes[g])
+        col = slice(0, 3) if c.name == "FORCE" else slice(3, 6)
+        get(sid)[g, col] += R.T @ v
+
+    def elements(c: _Card, first: int, where_thru: int) -> list[int]:
+        if c.text(where_thru) == "THRU":
+            lo, hi = c.int(first, what="EID1"), c.int(where_thru + 1, what="EID2")
+            ids = [e for e in shell_nodes if lo <= e <= hi]
+        else:
+            ids = [c.int(k, what="EID") for k in range(first, len(c)) if not c.blank(k)]
+        missing = [e for e in ids if e not in shell_nodes]
+        if missing or not ids:
+            raise FormatError(f"{c.where}: {c.name}: elements {missing or ids} are not "
+                              "CQUAD4/CTRIA3 elements of the deck")
+        return ids
+
+    def press(sid: int, p: float, ids: list[int]) -> None:
+        for k in (3, 4):
+            els = [shell_nodes[e] for e in ids if len(shell_nodes[e]) == k]
+            if els:
+                get(sid)[:, :3] += element_pressure(model.nodes, np.array(els), p)
+
+    for c in cards.get("PLOAD2", []):
+        sid, p = c.int(0, what="SID"), c.real(1, what="P")
+        press(sid, p, elements(c, 2, 3))
+    for c in cards.get("PLOAD4", []):
+        sid, p = c.int(0, what="SID"), c.real(2, what="P1")
+        if any(not c.blank(k) and c.real(k) != p for k in (3, 4, 5)):
+            raise FormatError(f"{c.where}: PLOAD4: only uniform pressure (P2..P4 blank or "
+                              "= P1) is supported")
+        if any(not c.blank(k) and c.real(k, 0.0) != 0.0 for k in range(9, len(c))):
+            raise FormatError(f"{c.where}: PLOAD4: a load direction (CID, N1..N3) is not "
+                              "supported (pressure along the element normal only)")
+        if c.text(6) == "THRU":
+            ids = elements(c, 1, 6)
+        elif not (c.blank(6) and c.blank(7)):
+            raise FormatError(f"{c.where}: PLOAD4: G1/G3 (solid faces) are not supported")
+        else:
+            ids = [c.int(1, what="EID")]
+            if ids[0] not in shell_nodes:
+                raise FormatError(f"{c.where}: PLOAD4: element {ids[0]} is not a "
+                                  "CQUAD4/CTRIA3 element of the deck")
+        press(sid, p, ids)
+    for c in cards.get("GRAV", []):
+        sid = c.int(0, what="SID")
+        if c.int(6, 0, "MB") != 0:
+            raise FormatError(f"{c.where}: GRAV: MB must be 0")
+        a = c.real(2, what="A") * np.array([c.real(k, 0.0, "N") for k in (3, 4, 5)])
+        R = system(c.int(1, 0, "CID"), c.where).axes
+        get(sid)[:] += gravity_nodal(model, R.T @ a)
+    out = {str(k): v for k, v in sets.items()}
+    for c in cards.get("LOAD", []):
+        sid, scale = c.int(0, what="SID"), c.real(1, what="S")
+        total = np.zeros((n, 6))
+        for k in range(2, len(c), 2):
+            if c.blank(k) and c.blank(k + 1):
+                continue
+            li = c.int(k + 1, what="L")
+            if li not in sets:
+                raise FormatError(f"{c.where}: LOAD {sid}: load set {li} is not defined by "
+                                  "FORCE, MOMENT, PLOAD2, PLOAD4 or GRAV cards")
+            total += c.real(k, what="S") * sets[li]
+        out[str(sid)] = scale * total
+    return out
 
 
 def _rbe3(c: _Card, node) -> RigidLink:

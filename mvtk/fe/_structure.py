@@ -742,7 +742,9 @@ def _with_loads(s: Mapping, model: FEModel, systems) -> FEModel:
     """The model with ``meta["load_cases"]`` from ``[[loads]]`` (when given)."""
     if "loads" not in s:
         return model
-    return replace(model, meta=dict(model.meta, load_cases=load_cases(s, model, systems)))
+    cases = dict(model.meta.get("load_cases") or {})  # a deck's own load sets stay
+    cases.update(load_cases(s, model, systems))
+    return replace(model, meta=dict(model.meta, load_cases=cases))
 
 
 def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:

@@ -125,3 +125,28 @@ def test_deck_reads_card_for_card_as_pynastran(deck):
         r = ref["MAT1"][str(c.int(0))]
         assert c.real(1) == r["e"] and c.real(4, 0.0) == r["rho"]
         assert c.real(2, r["g"]) == r["g"] and c.real(3, r["nu"]) == r["nu"]
+
+
+def test_load_cards_resultants_as_pynastran():
+    """FORCE, MOMENT, PLOAD4 (single and THRU), PLOAD2 (list and THRU) and a LOAD
+    combination of mvtk's loads.bdf: total force and moment about the origin equal
+    pyNastran's sum_forces_moments (loads_reference.json); the case control's LOAD and
+    SPC are found; a FORCE in a CORD2C acts along the local (r, theta, z) at its grid;
+    GRAV is the gravity load of the model's mass."""
+    from mvtk.fe import gravity_nodal, read_nastran
+
+    ref = json.loads((DATA / "loads_reference.json").read_text())
+    model = read_nastran(DATA / "loads.bdf")
+    assert model.meta["nastran"]["load_id"] == 100 and model.meta["nastran"]["spc_id"] == 1
+    cases = model.meta["load_cases"]
+    for sid, r in ref.items():
+        f = cases[sid]
+        np.testing.assert_allclose(f[:, :3].sum(axis=0), r["force"], atol=1e-9)
+        moment = (np.cross(model.nodes, f[:, :3]) + f[:, 3:]).sum(axis=0)
+        np.testing.assert_allclose(moment, r["moment"], atol=1e-9)
+    g = int(np.flatnonzero(model.node_ids == 12)[0])
+    x = model.nodes[g] - [0.5, 0.3, 0.0]
+    th = np.arctan2(x[1], x[0])
+    e_r, e_t = np.array([np.cos(th), np.sin(th), 0]), np.array([-np.sin(th), np.cos(th), 0])
+    np.testing.assert_allclose(cases["11"][g, :3], 50.0 * (e_r + 0.5 * e_t), atol=1e-12)
+    np.testing.assert_allclose(cases["40"], gravity_nodal(model, (0, 0, -9.81)), atol=1e-12)
