@@ -496,6 +496,23 @@ def _constraint_matrix(nodes: np.ndarray, links: Sequence[RigidLink]) -> tuple[
     return C, dependent
 
 
+def _check_conforming(nine: Sequence[np.ndarray], first: Sequence[ShellSet]) -> None:
+    """Refuse nine-node and first-order shells that share an edge (not conforming: the
+    nine-node edge is quadratic, the other linear)."""
+    if not nine or not first:
+        return
+    quad = np.concatenate([el[:, [j, (j + 1) % 4]] for el in nine for j in range(4)])
+    lin = np.concatenate([m.elements[:, [j, (j + 1) % m.elements.shape[1]]]
+                          for m in first for j in range(m.elements.shape[1])])
+    a = {tuple(e) for e in np.sort(quad, axis=1).tolist()}
+    shared = [e for e in np.sort(lin, axis=1).tolist() if tuple(e) in a]
+    if shared:
+        raise ParameterError(
+            f"{len(shared)} edges (e.g. nodes {shared[0]}) are shared by nine-node (MITC9) "
+            "and first-order shells; the two do not conform along an edge: mesh the whole "
+            "surface with one order")
+
+
 def _directors(nodes: np.ndarray, sets: Sequence[np.ndarray]) -> np.ndarray:
     """Unit nodal directors of nine-node shells: the average of the surface normals of
     the elements at each node (zero rows for other nodes)."""
@@ -687,8 +704,10 @@ def assemble_model(
         return 0.5 * (A + np.swapaxes(A, 1, 2))
 
     K_parts, M_parts = [], []
-    directors = _directors(nodes, [m.elements for m in members
-                                   if isinstance(m, ShellSet) and m.elements.shape[1] == 9])
+    nine = [m.elements for m in members if isinstance(m, ShellSet) and m.elements.shape[1] == 9]
+    _check_conforming(nine, [m for m in members if isinstance(m, ShellSet)
+                             and m.elements.shape[1] != 9])
+    directors = _directors(nodes, nine)
     for mbr in members:
         if isinstance(mbr, ShellSet):
             el = mbr.elements

@@ -179,3 +179,15 @@ def test_curved_panel_quad9_mesh_is_regenerated_identically(tmp_path):
     spec.loader.exec_module(mod)
     out = mod.generate(tmp_path / "p9.msh", order=2)
     assert out.read_text() == (panel / "curved_panel_quad9.msh").read_text()
+
+
+def test_nine_node_and_first_order_shells_sharing_an_edge_are_refused():
+    from mvtk.errors import ParameterError
+
+    nodes, els, idx = _cylinder9(1, 1.0, 1.0, 30.0)
+    extra = np.vstack([nodes, nodes[idx[-1]] + [1.0, 0.0, 0.0]])
+    n = len(nodes)
+    quad = np.array([[idx[-1, 0], n, n + 2, idx[-1, 2]]])  # shares the corner edge
+    lam = Laminate((Ply(IsotropicMaterial("s", 2e11, 0.3, 7800.0), 0.01),))
+    with pytest.raises(ParameterError, match="do not conform along an edge"):
+        assemble_model(extra, [ShellSet(els, lam), ShellSet(quad, lam, name="q")])
