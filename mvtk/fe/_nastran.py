@@ -73,7 +73,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import FormatError, ParameterError
+from ..errors import FormatError, MvtkError, ParameterError
 from ._frames import CoordinateSystem
 from ._general import BeamSet, PointMass, RigidLink, ShellSet, Spring, assemble_model
 from ._laminate import Laminate
@@ -341,10 +341,15 @@ def _materials(cards, notes: dict) -> dict[int, OrthotropicMaterial]:
         rho = c.real(4, 0.0)
         if not c.blank(7):
             notes["damping"][f"MAT1 {mid}"] = c.real(7, what="GE")
-        if abs(G - E / (2 * (1 + nu))) <= 1e-12 * E:
-            mats[mid] = IsotropicMaterial(f"MAT1 {mid}", E, nu, rho)
-        else:  # E, G and NU all given and independent: keep the given G
-            mats[mid] = OrthotropicMaterial(f"MAT1 {mid}", E, E, G, G, G, nu, rho)
+        try:
+            if abs(G - E / (2 * (1 + nu))) <= 1e-12 * E:
+                mats[mid] = IsotropicMaterial(f"MAT1 {mid}", E, nu, rho)
+            else:  # E, G and NU all given and independent: keep the given G
+                mats[mid] = OrthotropicMaterial(f"MAT1 {mid}", E, E, G, G, G, nu, rho)
+        except MvtkError as err:
+            raise FormatError(f"{c.where}: MAT1 {mid}: {err}"
+                              + (" (RHO is blank: mvtk models carry mass; give the "
+                                 "density)" if rho == 0.0 else "")) from err
     for c in cards.get("MAT8", []):
         mid = c.int(0, what="MID")
         vals = [c.real(k, what=w) for k, w in ((1, "E1"), (2, "E2"), (3, "NU12"), (4, "G12"))]
@@ -354,8 +359,11 @@ def _materials(cards, notes: dict) -> dict[int, OrthotropicMaterial]:
                               "moduli) for shear-deformable shells")
         if not c.blank(16):
             notes["damping"][f"MAT8 {mid}"] = c.real(16, what="GE")
-        mats[mid] = OrthotropicMaterial(f"MAT8 {mid}", vals[0], vals[1], vals[3], g1z, g2z,
-                                        vals[2], c.real(7, 0.0))
+        try:
+            mats[mid] = OrthotropicMaterial(f"MAT8 {mid}", vals[0], vals[1], vals[3], g1z,
+                                            g2z, vals[2], c.real(7, 0.0))
+        except MvtkError as err:
+            raise FormatError(f"{c.where}: MAT8 {mid}: {err}") from err
     return mats
 
 

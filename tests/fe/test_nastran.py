@@ -358,3 +358,12 @@ def test_ring_on_radial_springs_in_a_cylindrical_system(tmp_path):
     np.testing.assert_allclose(f[1:3], closed(1), rtol=1e-4)
     np.testing.assert_allclose(f[3:5], closed(2), rtol=2e-3)
     np.testing.assert_allclose(f[5:7], closed(3), rtol=2e-3)
+
+
+def test_material_errors_name_the_card_line():
+    from pathlib import Path as _P
+
+    deck = _P(__file__).parent / "data" / "nastran" / "pbarl_bar.bdf"  # MAT1 without RHO
+    with pytest.raises(FormatError, match=r"pbarl_bar.bdf line 9: MAT1 1000: .*RHO is "
+                       r"blank"):
+        read_nastran(deck)
