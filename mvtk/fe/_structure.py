@@ -86,9 +86,11 @@ ends; points by ``x`` (``y``, if given, within the width).
 Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
 the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
 structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
-``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
-data/structures/README.md. Every unknown or inapplicable key raises
-:class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
+``[[masses]]``, ``[[rigid_links]]``, ``[[points]]`` with x, y, z,
+``[coordinate_systems.*]``, ``boundary.frames`` and ``[[loads]]``
+(:mod:`mvtk.fe._structure_loads`); its schema is in data/structures/README.md. Every
+unknown or inapplicable key raises :class:`~mvtk.errors.ConfigError` naming the key and
+the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
 ``patch:<name>:x0`` ... ``:y1``, and one set per point.

@@ -175,7 +175,7 @@ def _line_of_grids(n: int) -> str:
 
 def test_free_field_line_with_more_than_eight_data_fields_keeps_them(tmp_path):
     """SPC1 with 8 grids on one free-field line: the tenth field is a grid, not a marker
-    (an earlier reader dropped it silently)."""
+    (a reader that takes every field 10 for a marker drops it silently)."""
     p = tmp_path / "spc.bdf"
     p.write_text("BEGIN BULK\n" + _line_of_grids(9)
                  + "".join(f"CBAR,{i + 1},2,{i + 1},{i + 2},0.,1.,0.\n" for i in range(9))
