@@ -8,6 +8,7 @@ from ._assembly import (
     sparsity_pattern,
 )
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
+from ._frames import CoordinateSystem
 from ._general import (
     GENERAL_SUPPORTS,
     BeamSet,
@@ -19,6 +20,15 @@ from ._general import (
     support_dofs,
 )
 from ._laminate import Laminate
+from ._loads import (
+    StaticSolution,
+    gravity_load,
+    gravity_nodal,
+    nodal_load,
+    pressure_load,
+    pressure_nodal,
+    static_solution,
+)
 from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
 from ._matrices import read_matrices
 from ._mesh import (
@@ -53,7 +63,7 @@ from ._modal import (
     static_solve,
 )
 from ._model import DOF_NAMES, FEModel
-from ._nastran import read_nastran
+from ._nastran import read_bulk_cards, read_nastran
 from ._op4 import Op4Matrix, read_op4
 from ._piezo import (
     PiezoPatch,
@@ -82,6 +92,7 @@ from ._solvers import (
     fill_reducing_ordering,
 )
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
+from ._structure_loads import load_vector
 
 __all__ = [
     "DOF_NAMES",
@@ -143,6 +154,16 @@ __all__ = [
     "write_uff",
     "read_matrices",
     "AffineModel",
+    "read_bulk_cards",
+    "StaticSolution",
+    "gravity_load",
+    "gravity_nodal",
+    "nodal_load",
+    "pressure_load",
+    "pressure_nodal",
+    "static_solution",
+    "CoordinateSystem",
+    "load_vector",
     "read_nastran",
     "read_op4",
     "Op4Matrix",

@@ -181,6 +181,33 @@ def _part_matrices(xy: np.ndarray, parts, n_nodes: int, lam, drill_df: float) ->
     return Ku.reshape(4, n_u, *Ku.shape[1:])
 
 
+def _mitc9_parts(model, conn, lam, axis, parts, drill_df, u) -> np.ndarray:
+    """Bending, torsion, shear and in-plane energies (k, 4) of MITC9 elements."""
+    from ._general import _directors
+    from ._mitc9 import mitc9_matrices
+
+    directors = _directors(model.nodes, [model.elements["mitc9"]])
+    k = u.shape[1]
+    out = np.zeros((k, 4))
+    for start in range(0, len(conn), _CHUNK):
+        c = conn[start:start + _CHUNK]
+        ax = np.asarray(axis, dtype=float)
+        if ax.ndim == 2:
+            ax = ax[start:start + _CHUNK]
+        ue = u[(c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)]  # (n_el, 54, k)
+        e = np.zeros((4, len(c), k))
+        for part, (abd, h) in enumerate(parts):
+            Kp, _ = mitc9_matrices(model.nodes[c], directors[c], abd, h, (0.0, 0.0, 0.0),
+                                   lam.thickness, ax, drill_df if part == 3 else 0.0)
+            e[part] = np.einsum("eik,eij,ejk->ek", ue, Kp, ue, optimize=True)
+        normal, twist, shear, membrane = e
+        to_twist = twist > normal  # transverse shear joins the dominant curvature kind
+        out[:, 0] += (normal + np.where(to_twist, 0.0, shear)).sum(axis=0)
+        out[:, 1] += (twist + np.where(to_twist, shear, 0.0)).sum(axis=0)
+        out[:, 2] += membrane.sum(axis=0)
+    return out
+
+
 def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     """Strain energy of mode shapes split into bending, torsion, in-plane and axial parts.
 
@@ -239,6 +266,9 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
         parts = [(d_n, zero2), (d_t, zero2), (np.zeros((6, 6)), lam.H), (a_only, zero2)]
         drill_df = 1e-3 if drill is None else drill
         factors: dict = {}
+        if kind == "mitc9":  # curved nine-node shells: part matrices per element
+            out += _mitc9_parts(model, conn, lam, axis, parts, drill_df, u)
+            continue
         for start in range(0, len(conn), _CHUNK):
             c = conn[start:start + _CHUNK]
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)

@@ -86,9 +86,11 @@ ends; points by ``x`` (``y``, if given, within the width).
 Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
 the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
 structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
-``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
-data/structures/README.md. Every unknown or inapplicable key raises
-:class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
+``[[masses]]``, ``[[rigid_links]]``, ``[[points]]`` with x, y, z,
+``[coordinate_systems.*]``, ``boundary.frames`` and ``[[loads]]``
+(:mod:`mvtk.fe._structure_loads`); its schema is in data/structures/README.md. Every
+unknown or inapplicable key raises :class:`~mvtk.errors.ConfigError` naming the key and
+the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
 ``patch:<name>:x0`` ... ``:y1``, and one set per point.
@@ -118,6 +120,7 @@ from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, P
 from ._mesh import Patch
 from ._model import DOF_NAMES, FEModel
 from ._plate import SpringSupport, plate_model
+from ._structure_loads import coordinate_systems, load_cases, node_frames
 
 __all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "constrain_model"]
 
@@ -325,7 +328,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
     s = copy.deepcopy(dict(structure))
     known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points",
-             "sections", "masses", "rigid_links"}
+             "sections", "masses", "rigid_links", "coordinate_systems", "loads"}
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
@@ -340,7 +343,9 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     if kind == "mesh":
         return _build_mesh(s, st, materials, source)
     for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
-                     ("rigid_links", "for imported meshes")):
+                     ("rigid_links", "for imported meshes"),
+                     ("coordinate_systems", "for imported meshes and Nastran decks"),
+                     ("loads", "for imported meshes and Nastran decks")):
         if key in s:
             raise ConfigError(f"{key}: not applicable to structure.type = {kind!r} ({why}, "
                               "structure.type = 'mesh')")
@@ -590,8 +595,8 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
             raise ConfigError(f"sections.{name}: expected layers (shell) or shape (beam: "
                               f"{', '.join(_SHAPES)}), got shape={shape!r}")
         dims = _SHAPES[shape]
-        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset")
-                    + dims)
+        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset",
+                                             "shear_factor") + dims)
         mat = d.get("material")
         if mat not in materials:
             raise ConfigError(f"{w}material: {mat!r} is not defined; defined materials: "
@@ -604,6 +609,10 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
                        "generic": secs.generic_section}[shape](materials[mat], **vals)
         except MvtkError as err:
             raise ConfigError(f"sections.{name}: {err}") from err
+        if "shear_factor" in d:  # k of k G A, both bending planes
+            sf = _number(d, "shear_factor", w)
+            GA = materials[mat].G12 * section.EA / materials[mat].E1
+            section = replace(section, kGAz=sf * GA, kGAy=sf * GA)
         out[name] = BeamProperty(section, _vec(d, "orientation", w, [0.0, 0.0, 1.0]),
                                  _vec(d, "offset", w, [0.0, 0.0, 0.0]))
     return out
@@ -666,11 +675,30 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"masses[{i}]"
         if not isinstance(m, Mapping):
             raise ConfigError(f"{w}: expected a table")
-        _check_keys(m, w, ("point", "mass", "inertia", "offset"))
-        members.append(PointMass(one_node(m.get("point"), w + ".point"),
-                                 _number(m, "mass", w + ".", positive=False),
-                                 _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0]),
-                                 _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])))
+        _check_keys(m, w, ("point", "mass", "inertia", "offset", "system"))
+        node_ = one_node(m.get("point"), w + ".point")
+        inertia = m.get("inertia", [0.0, 0.0, 0.0])
+        if isinstance(inertia, list) and len(inertia) == 3 and all(
+                isinstance(r, list) for r in inertia):
+            J = np.array(inertia, dtype=float)  # a full tensor [[Ixx, Ixy, Ixz], ...]
+            if J.shape != (3, 3):
+                raise ConfigError(f"{w}.inertia: expected 3 numbers or a 3 x 3 tensor")
+        else:
+            J = _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0])
+        frame = None
+        if "system" in m:
+            systems_ = coordinate_systems(s)
+            if m["system"] not in systems_:
+                raise ConfigError(f"{w}.system: {m['system']!r} is not defined; defined: "
+                                  f"{sorted(systems_)}")
+            frame = systems_[m["system"]].axes_at(mesh.nodes[node_])
+        try:
+            members.append(PointMass(node_, _number(m, "mass", w + ".", positive=False),
+                                     J, _vec(m, "offset", w + ".", [0.0, 0.0, 0.0]),
+                                     frame))
+            members[-1].matrix()
+        except MvtkError as err:
+            raise ConfigError(f"{w}: {err}") from err
     for i, r in enumerate(s.get("rigid_links", [])):
         w = f"rigid_links[{i}]"
         if not isinstance(r, Mapping):
@@ -686,10 +714,12 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"),
+    _check_keys(b, "boundary", ("supports", "springs", "frames"),
                 {k: "for the built-in plate/beam; use boundary.supports on a node set"
                  for k in ("clamp", "clamp_stiffness", "clamp_translational_stiffness",
                            "edges")})
+    systems = coordinate_systems(s)
+    frames = node_frames(b, systems, mesh.nodes, node_sets)
     for sp_ in _springs(b, allow_per_length=False):
         set_name, dof, kval, _ = sp_
         if set_name not in node_sets:
@@ -700,12 +730,23 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if source is not None:
         meta["source"] = source
     try:
-        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
-                          members=members, supports=_supports(b), node_sets=node_sets,
-                          name=str(s.get("name", "")), meta=meta)
+        model = mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                           members=members, supports=_supports(b), node_sets=node_sets,
+                           name=str(s.get("name", "")), meta=meta,
+                           node_frames=frames or None)
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
+    return _with_loads(s, model, systems)
+
+
+def _with_loads(s: Mapping, model: FEModel, systems) -> FEModel:
+    """The model with ``meta["load_cases"]`` from ``[[loads]]`` (when given)."""
+    if "loads" not in s:
+        return model
+    cases = dict(model.meta.get("load_cases") or {})  # a deck's own load sets stay
+    cases.update(load_cases(s, model, systems))
+    return replace(model, meta=dict(model.meta, load_cases=cases))
 
 
 def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:
@@ -724,7 +765,9 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"))
+    _check_keys(b, "boundary", ("supports", "springs"),
+                {"frames": "a Nastran deck gives node frames by GRID CD"})
+    systems = coordinate_systems(s)
     try:
         model = read_nastran(path, spc_id=spc, name=str(s.get("name", "")))
     except MvtkError as err:
@@ -740,7 +783,8 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     if source is not None:
         meta["source"] = source
     model = replace(model, node_sets=sets, meta=meta)
-    return constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    model = constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    return _with_loads(s, model, systems)
 
 
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
