@@ -1,0 +1,219 @@
+"""Electromechanical shells (mvtk.fe._electro): piezo patches as voltage inputs and charge
+outputs on flat and curved MITC4/MITC3 meshes, against closed forms and a standard."""
+
+from __future__ import annotations
+
+import copy
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from mvtk.errors import ConfigError, ParameterError
+from mvtk.fe import (
+    Electrode,
+    Laminate,
+    OrthotropicPiezoMaterial,
+    PiezoMaterial,
+    Ply,
+    ShellPiezoPatch,
+    ShellSet,
+    assemble_model,
+    build_model,
+    load_structure,
+    modal_analysis,
+    modal_emcc,
+    piezo_coupling,
+    ply_piezo_constants,
+    static_solve,
+)
+
+EPS0 = 8.8541878128e-12
+PANEL = Path(__file__).resolve().parents[2] / "data" / "structures" / "curved_panel" \
+    / "curved_panel.toml"
+
+
+def _strip(L, b, nx, ny, tri=False):
+    xs, ys = np.linspace(0, L, nx + 1), np.linspace(0, b, ny + 1)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+
+    def n(i, j):
+        return i * (ny + 1) + j
+
+    quads = np.array([[n(i, j), n(i + 1, j), n(i + 1, j + 1), n(i, j + 1)]
+                      for i in range(nx) for j in range(ny)])
+    if tri:
+        return nodes, np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    return nodes, quads
+
+
+@pytest.mark.parametrize("tri", [False, True])
+def test_parallel_bimorph_cantilever_matches_smits(tri):
+    """Smits, Dalke & Cooney (1991), parallel bimorph: tip deflection per volt
+    3 d31 L^2 / h^2 and blocked tip force 3/4 E d31 b h / L (nu = 0, so the strip is the
+    beam of the closed form), from MITC4 quads and MITC3 triangles."""
+    E, d31 = 66.667e9, -210e-12
+    pz = PiezoMaterial("PZT nu=0", E, 0.0, 7800.0, d31, eps33=2400 * EPS0)
+    t, L, b = 0.25e-3, 0.04, 0.005
+    nodes, el = _strip(L, b, 40, 2, tri)
+    lam = Laminate((Ply(pz, t), Ply(pz, t)))
+    clamp = np.flatnonzero(nodes[:, 0] == 0)
+    tip = np.flatnonzero(np.isclose(nodes[:, 0], L))
+    m = assemble_model(nodes, [ShellSet(el, lam)], supports={"c": "clamped"},
+                       node_sets={"c": clamp})
+    # plies poled the same way, driven with opposite signs: the bimorph bends
+    p = ShellPiezoPatch("bim", el, lam, electrodes=(Electrode("V", (0, 1), (-1, 1)),))
+    cp = piezo_coupling(m, [p])
+    uz = m.expand(static_solve(m, cp.B[:, 0]))[tip, 2].mean()
+    h = 2 * t
+    assert abs(uz) == pytest.approx(3 * abs(d31) * L**2 / h**2, rel=0.01)
+    assert uz > 0  # top ply contracts (d31 < 0, driven along its poling): bends up
+    f = np.zeros(m.n_dof)
+    f[[m.dof_index(i, "uz") for i in tip]] = 1.0 / len(tip)
+    g = m.expand(static_solve(m, f))[tip, 2].mean()
+    assert uz / g == pytest.approx(0.75 * E * abs(d31) * b * h / L, rel=0.01)
+    # blocked capacitance of the two plies in parallel: eps33^S = eps33^T - d'Qd
+    eps_s = 2400 * EPS0 - 2 * d31**2 * E
+    assert cp.C[0] == pytest.approx(2 * eps_s * L * b / t, rel=1e-12)
+
+
+def test_k31_bar_resonance_and_antiresonance_match_ieee176():
+    """A thin free-free PZT-5H bar with full electrodes (IEEE Std 176-1987, the k31
+    length-extensional resonator): the anti-resonance solves
+    (1 - k31^2) + k31^2 tan(x)/x = 0 with x = omega L / (2 c); the model's
+    open-circuit / short-circuit frequency ratio and EMCC agree."""
+    s11, s12 = 16.5e-12, -4.78e-12          # PZT-5H, m^2/N
+    d31, eps = -274e-12, 3400 * EPS0
+    rho, L = 7500.0, 0.04
+    pz = PiezoMaterial("PZT-5H", 1 / s11, -s12 / s11, rho, d31, eps33=eps)
+    nodes, el = _strip(L, 0.002, 80, 1)
+    lam = Laminate((Ply(pz, 0.5e-3),))
+    m = assemble_model(nodes, [ShellSet(el, lam)], supports={"all": ["uz", "rx", "ry"]},
+                       node_sets={"all": np.arange(len(nodes))})
+    rows = modal_emcc(m, piezo_coupling(m, [ShellPiezoPatch("p", el, lam)]), n_modes=8)
+    ext = max((r for r in rows if np.isfinite(r["k2"])), key=lambda r: r["k2"])
+    k2 = d31**2 / (s11 * eps)
+    xa = brentq(lambda x: (1 - k2) * np.cos(x) * x + k2 * np.sin(x), np.pi / 2 + 1e-9,
+                np.pi - 1e-9)
+    assert ext["f_sc_hz"] == pytest.approx(1 / (2 * L * np.sqrt(rho * s11)), rel=2e-3)
+    assert ext["f_oc_hz"] / ext["f_sc_hz"] == pytest.approx(xa / (np.pi / 2), rel=1e-3)
+    assert ext["k2"] == pytest.approx((xa / (np.pi / 2)) ** 2 - 1, rel=0.05)
+    assert all(r["f_oc_hz"] >= r["f_sc_hz"] * (1 - 1e-12) for r in rows)
+
+
+def test_orthotropic_ply_angle_rotates_the_piezo_stress():
+    mfc = OrthotropicPiezoMaterial("MFC", 30.336e9, 15.857e9, 5.515e9, 5.515e9, 5.515e9,
+                                   0.31, 5440.0, d31=-2.1e-10, d32=-1.6e-10, eps33=1e-8)
+    e0, _ = ply_piezo_constants(Ply(mfc, 0.3e-3, 0.0))
+    e90, _ = ply_piezo_constants(Ply(mfc, 0.3e-3, 90.0))
+    q = mfc.plane_stress_q()
+    assert e0[0] == pytest.approx(q[0, 0] * -2.1e-10 + q[0, 1] * -1.6e-10, rel=1e-12)
+    assert e90[:2] == pytest.approx(e0[1::-1], rel=1e-12)
+    e45, _ = ply_piezo_constants(Ply(mfc, 0.3e-3, 45.0))
+    assert e45[2] == pytest.approx(0.5 * (e0[0] - e0[1]), rel=1e-12)
+
+
+def _panel(rotation=None):
+    d = load_structure(PANEL)
+    d["materials"]["pic151"] = {"E": 66.667e9, "nu": 0.34, "rho": 7800.0,
+                                "d31": -210e-12, "eps33": 2400 * EPS0}
+    d["materials"]["epoxy"] = {"E": 3.5e9, "nu": 0.35, "rho": 1180.0}
+    lay = [{"material": "epoxy", "thickness": 50e-6},
+           {"material": "pic151", "thickness": 0.25e-3}]
+    o = np.array([0.1, 0.1, np.sqrt(0.25 - 0.01)])
+    reg = {"shape": "box", "origin": o.tolist(), "u": [-0.03, 0.03], "v": [-0.035, 0.035]}
+    d["patches"] = [{"name": "act", "region": reg, "layers": lay},
+                    {"name": "sen", "region": copy.deepcopy(reg), "layers": lay,
+                     "side": "bottom"}]
+    return d
+
+
+def test_curved_panel_collocated_pair_reciprocity_and_open_circuit():
+    m = build_model(_panel())
+    cp = piezo_coupling(m)
+    assert cp.names == ("act", "sen")
+    # reciprocity of the quasi-static transfer act -> charge sen and back
+    X = static_solve(m, cp.B)
+    G = cp.B.T @ X
+    assert abs(G[0, 1] - G[1, 0]) <= 1e-10 * abs(G[0, 1])
+    # at 1.3x the first mode, with structural damping
+    sc = modal_analysis(m, 4)
+    w = 2 * np.pi * 1.3 * sc.fn_hz[0]
+    A = (m.K * (1 + 0.02j) - w**2 * m.M).tocsc()
+    from scipy.sparse.linalg import spsolve
+    H = cp.B.T @ spsolve(A, cp.B.astype(complex))
+    assert abs(H[0, 1] - H[1, 0]) <= 1e-10 * abs(H[0, 1])
+    rows = modal_emcc(m, cp, n_modes=6)
+    assert all(r["f_oc_hz"] >= r["f_sc_hz"] for r in rows)
+    assert max(r["k2"] for r in rows) > 1e-3  # the patches do couple to the panel
+
+
+def _rot(axis_angle):
+    v = np.asarray(axis_angle, float)
+    a = np.linalg.norm(v)
+    k = v / a
+    Kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(a) * Kx + (1 - np.cos(a)) * Kx @ Kx
+
+
+def test_rotating_the_whole_model_leaves_the_electromechanics_unchanged(tmp_path):
+    import meshio
+
+    R = _rot([0.3, -0.7, 0.5])
+    d0 = _panel()
+    mesh = meshio.read(Path(d0["mesh"]["file"]))
+    mesh.points = mesh.points @ R.T
+    f = tmp_path / "rot.msh"
+    meshio.write(f, mesh, file_format="gmsh22", binary=False)
+    d1 = copy.deepcopy(d0)
+    d1["mesh"]["file"] = str(f)
+    d1["sections"]["skin"]["material_axis"] = (R @ [1, 0, 0]).tolist()
+    d1["sections"]["rib"]["orientation"] = (R @ [0, 1, 0]).tolist()
+    d1["sections"]["rib"]["offset"] = (R @ [0, 0, 8e-3]).tolist()
+    d1["points"][0].update(dict(zip("xyz", (R @ [0.2, 0.0, 0.5]).tolist())))
+    for p in d1["patches"]:
+        p["region"]["origin"] = (R @ p["region"]["origin"]).tolist()
+        p["region"]["axis"] = (R @ [1, 0, 0]).tolist()
+    m0, m1 = build_model(d0), build_model(d1)
+    c0, c1 = piezo_coupling(m0), piezo_coupling(m1)
+    assert c1.C == pytest.approx(c0.C, rel=1e-8)
+    G0 = c0.B.T @ static_solve(m0, c0.B)
+    G1 = c1.B.T @ static_solve(m1, c1.B)
+    assert np.max(np.abs(G1 - G0)) <= 1e-8 * np.max(np.abs(G0))
+    f0 = [r["f_oc_hz"] for r in modal_emcc(m0, c0, 4)]
+    f1 = [r["f_oc_hz"] for r in modal_emcc(m1, c1, 4)]
+    assert np.allclose(f1, f0, rtol=1e-8)
+
+
+@pytest.mark.parametrize("change, key", [
+    (lambda d: d["patches"][0]["region"].update(origin=[0.1, 0.1, 0.9]),
+     "patches[0].region.origin"),
+    (lambda d: d["patches"][0].pop("region") and d["patches"][0].update(element_set="nope"),
+     "patches[0].element_set"),
+    (lambda d: d["patches"][0].update(electrodes=[{"name": "e", "plies": [0]}]),
+     "patches[0].electrodes[0].plies"),
+    (lambda d: d["patches"][0].update(electrodes=[{"name": "e", "plies": []}]),
+     "patches[0].electrodes[0].plies"),
+    (lambda d: d["materials"]["pic151"].pop("d31"), "materials.pic151.d31"),
+])
+def test_bad_patch_input_gives_one_line_errors_naming_the_key(change, key):
+    d = _panel()
+    change(d)
+    with pytest.raises(ConfigError) as err:
+        build_model(d)
+    msg = str(err.value)
+    assert key in msg and "\n" not in msg
+
+
+def test_electrode_checks():
+    pz = PiezoMaterial("p", 60e9, 0.3, 7800.0, -2e-10)
+    lam = Laminate((Ply(PiezoMaterial("q", 60e9, 0.3, 7800.0, -2e-10), 1e-4), Ply(pz, 1e-4)))
+    with pytest.raises(ParameterError, match="wired to no ply"):
+        Electrode("e", ())
+    with pytest.raises(ParameterError, match="wired to electrodes"):
+        ShellPiezoPatch("p", np.array([[0, 1, 2, 3]]), lam,
+                        electrodes=(Electrode("a", (0,)), Electrode("b", (0, 1))))
+    with pytest.raises(ParameterError, match="d31"):
+        PiezoMaterial("z", 60e9, 0.3, 7800.0, 0.0)
