@@ -87,7 +87,12 @@ Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs
 the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
 structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
 ``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
-data/structures/README.md. Every unknown or inapplicable key raises
+data/structures/README.md; its ``[[patches]]`` take ``name``, ``element_set`` (a set of
+the mesh) or ``region`` (``shape`` box/circle/polygon, ``origin``, ``axis``, ``u``, ``v``,
+``radius``, ``points``: see :func:`mvtk.fe.select_region`), ``layers`` (from the base
+outwards), ``side`` (top/bottom) and ``electrodes`` (``name``, ``plies``, ``signs``); the
+piezo plies become electrodes of ``meta['piezo_patches']`` (:func:`mvtk.fe.piezo_coupling`,
+docs/guide/fe.md). Every unknown or inapplicable key raises
 :class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
