@@ -41,7 +41,6 @@ def with_electrodes(se: SuperElement, coupling: PiezoCoupling
         From :func:`mvtk.reduction.craig_bampton` on the model of ``coupling``.
     coupling : PiezoCoupling
         :func:`mvtk.fe.piezo_coupling` of ``se.model``.
-
     Returns
     -------
     (SuperElement, ndarray)
@@ -69,17 +68,18 @@ def with_electrodes(se: SuperElement, coupling: PiezoCoupling
     psi[f] = factorize(K_ff).solve(B[f])
     T = se.T
     M = model.M
+    before = np.sqrt(np.abs(np.einsum("ij,ij->j", psi, M @ psi)))
     # M-orthogonal to the existing basis (two passes for round-off)
     for _ in range(2):
         psi -= T @ np.linalg.solve(se.M, T.T @ (M @ psi))
     m_psi = psi.T @ (M @ psi)
     k_psi = psi.T @ (model.K @ psi)
-    scale = np.sqrt(np.abs(np.diag(m_psi)))
-    ref = np.sqrt(np.abs(np.diag(B[f].T @ psi[f])))  # |b' K_ff^-1 b|^(1/2): shape size
-    weak = scale <= 1e-10 * np.maximum(ref, 1e-300) * np.sqrt(np.abs(M.diagonal()).max())
+    weak = np.sqrt(np.abs(np.diag(m_psi))) <= 1e-8 * before
     if np.any(weak):
-        raise ParameterError(f"electrode(s) {[coupling.names[i] for i in np.flatnonzero(weak)]}"
-                             ": static shape already in the super element's basis")
+        n_e = B.shape[1]
+        raise ParameterError(
+            f"electrode(s) {[coupling.names[i % n_e] for i in np.flatnonzero(weak)]}: "
+            "static shape already in the super element's basis")
     w2, vec = sla.eigh(k_psi, m_psi)
     psi = psi @ vec
     Ta = np.hstack([T, psi])

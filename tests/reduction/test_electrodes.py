@@ -20,7 +20,7 @@ def test_se_voltage_to_charge_frf_matches_the_full_model():
     m = build_model(_panel())
     cp = piezo_coupling(m)
     band = 400.0
-    se = craig_bampton(m, ["centre"], f_cut_hz=2.5 * band)
+    se = craig_bampton(m, ["centre"], f_cut_hz=1500.0)
     se2, Br = with_electrodes(se, cp)
     assert se2.labels[-2:] == ("v:act", "v:sen")
     Br0 = se.T.T @ cp.B
@@ -41,10 +41,12 @@ def test_se_voltage_to_charge_frf_matches_the_full_model():
         err.append(np.abs(np.abs(Hr) - np.abs(H)) / np.abs(H))
         err0.append(np.abs(np.abs(H0) - np.abs(H)) / np.abs(H))
     err, err0 = np.max(err, axis=0), np.max(err0, axis=0)
-    # each electrode's own voltage -> charge (feed-through included): within 1 %
+    # voltage -> charge of each electrode (feed-through included) and across the
+    # collocated pair, anti-resonances and the patch mode's peak (335 Hz) included:
+    # within 1 % (measured 0.01 % and 0.27 %). The SE keeps the fixed-interface modes
+    # to 1500 Hz = 3.75x the band: with modes to 1000 Hz the 335 Hz mode is 2e-4 off and
+    # the peak of the cross transfer (1 % damping) 4 % off
     assert err[0, 0] < 0.01 and err[1, 1] < 0.01
-    # top actuator -> bottom sensor: 4.1 % at the peak of the patch mode (335 Hz, SE
-    # frequency error 2e-4 with 1 % damping), elsewhere < 2 %
-    assert err[0, 1] < 0.05
+    assert err[0, 1] < 0.01
     # without the electrodes' static shapes the feed-through is lost
     assert err0[0, 0] > 0.1
