@@ -381,7 +381,8 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         name = p.get("name")
         if not isinstance(name, str) or not name:
             raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
-        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers",
+                                          "electrodes"))
         coords = [_number(p, k, w, positive=False) for k in ("x0", "x1", "y0", "y1")]
         patches.append((Patch(name, *coords), _plies(p.get("layers"), materials, w + "layers")))
 
@@ -437,6 +438,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
             clamp_translational_stiffness=cts, springs=springs, points=points,
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
+        model = _plate_piezo(model, s.get("patches", []), patches, len(layers))
         return constrain_model(model, general, ())
     except ConfigError:
         raise
@@ -1023,3 +1025,32 @@ def _mesh_patches(s: Mapping, mesh, mapping: dict, sections: dict, materials: Ma
                 raise ConfigError(f"patches[{i}]: {err}") from err
     out.sort(key=lambda pp: [it[1] for it in items].index(pp.name))
     return (_replace(mesh, element_sets=esets, node_sets=node_sets), mapping, sections, out)
+
+
+def _plate_piezo(model: FEModel, raw: list, patches: list, n_base: int) -> FEModel:
+    """``meta["piezo_patches"]`` of a generated plate: the piezo plies of each patch (its
+    elements are the plate's region ``i + 1``, its section base + patch plies)."""
+    from ._electro import Electrode, ShellPiezoPatch
+    from ._materials import is_piezo
+
+    out = []
+    region = np.asarray(model.meta["element_region"])
+    for i, ((patch, plies), p) in enumerate(zip(patches, raw)):
+        index = [n_base + k for k in range(len(plies))]
+        electrodes = _electrodes(p, f"patches[{i}].", patch.name, plies, index)
+        piezo = [index[k] for k, q in enumerate(plies) if is_piezo(q.material)]
+        if electrodes is None and piezo:
+            electrodes = tuple(Electrode(patch.name if len(piezo) == 1 else
+                                         f"{patch.name}:{k}", (j,))
+                               for k, j in enumerate(piezo))
+        if electrodes is None:
+            continue
+        try:
+            out.append(ShellPiezoPatch(patch.name, model.elements["mitc4"][region == i + 1],
+                                       model.meta["laminates"][i + 1], (1.0, 0.0, 0.0),
+                                       electrodes))
+        except MvtkError as err:
+            raise ConfigError(f"patches[{i}]: {err}") from err
+    if not out:
+        return model
+    return replace(model, meta=dict(model.meta, piezo_patches=tuple(out)))

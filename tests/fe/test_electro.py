@@ -217,3 +217,43 @@ def test_electrode_checks():
                         electrodes=(Electrode("a", (0,)), Electrode("b", (0, 1))))
     with pytest.raises(ParameterError, match="d31"):
         PiezoMaterial("z", 60e9, 0.3, 7800.0, 0.0)
+
+
+def test_unimorph_on_the_generated_plate_matches_the_uniform_strain_beam():
+    """Crawley & de Luis (1987), perfectly bonded (uniform-strain / Euler-Bernoulli)
+    limit: a full-width patch from a to c on a cantilever strip bends it with the
+    curvature M_p / EI_c under the patch (M_p the piezo moment per volt about the
+    composite neutral axis, EI_c the composite stiffness), so the tip deflects by
+    kappa (c - a) ((c - a) / 2 + L - c). Materials with nu = 0 make the strip the beam."""
+    from mvtk.fe import neutral_axis, piezo_moment_per_volt
+    from mvtk.fe._materials import IsotropicMaterial
+
+    L, b, a, c = 0.1, 0.01, 0.01, 0.05
+    desc = {
+        "materials": {"steel": {"E": 210e9, "nu": 0.0, "rho": 7850.0},
+                      "glue": {"E": 3.5e9, "nu": 0.0, "rho": 1200.0},
+                      "pzt": {"E": 66.667e9, "nu": 0.0, "rho": 7800.0, "d31": -210e-12,
+                              "eps33": 2400 * EPS0}},
+        "structure": {"type": "plate", "length": L, "width": b,
+                      "layers": [{"material": "steel", "thickness": 0.5e-3}]},
+        "patches": [{"name": "pzt", "x0": a, "x1": c, "y0": 0.0, "y1": b,
+                     "layers": [{"material": "glue", "thickness": 40e-6},
+                                {"material": "pzt", "thickness": 0.25e-3}]}],
+        "mesh": {"nx": 50, "ny": 2},
+        "boundary": {"clamp": "x0"},
+        "points": [{"name": "tip", "x": L, "y": b / 2}],
+    }
+    m = build_model(desc)
+    cp = piezo_coupling(m)
+    assert cp.names == ("pzt",)
+    w = m.expand(static_solve(m, cp.B[:, 0]))[m.node_set("x1"), 2].mean()
+    stack = (Ply(IsotropicMaterial("steel", 210e9, 0.0, 7850.0), 0.5e-3),
+             Ply(IsotropicMaterial("glue", 3.5e9, 0.0, 1200.0), 40e-6),
+             Ply(PiezoMaterial("pzt", 66.667e9, 0.0, 7800.0, -210e-12), 0.25e-3))
+    Mp = piezo_moment_per_volt(stack, 2, width=b)
+    D = neutral_axis(stack)
+    z = np.concatenate([[0.0], np.cumsum([p.thickness for p in stack])])
+    EI = sum(p.material.E * b * ((z[k + 1] - D) ** 3 - (z[k] - D) ** 3) / 3
+             for k, p in enumerate(stack))
+    kappa = -Mp / EI
+    assert w == pytest.approx(kappa * (c - a) * ((c - a) / 2 + L - c), rel=0.01)
