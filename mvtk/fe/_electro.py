@@ -40,10 +40,18 @@ collected on the electrodes ``Q = B' q + C_p V`` (C). Electrical conditions:
 - voltage sensor: ``V = -C_p^-1 B' q`` (open electrodes).
 
 Wiring: an electrode collects one or more piezo plies in **parallel** (same voltage,
-charges add); each ply enters with a sign ``+1`` when the electrode voltage drives it
-along its poling, ``-1`` when against. A bimorph in parallel bends when its two plies
-are driven with opposite signs of the induced strain: plies poled the same way with
-signs ``(+1, -1)``, or poled oppositely with ``(+1, +1)`` (the signs are what matters).
+charges add) or in **series** (the same charge flows through every ply, the ply voltages
+add up to the electrode's); each ply enters with a sign ``+1`` when the electrode
+voltage drives it along its poling, ``-1`` when against. A bimorph bends when its two
+plies are driven with opposite signs of the induced strain: plies poled the same way
+with signs ``(+1, -1)``, or poled oppositely with ``(+1, +1)`` (the signs are what
+matters). In series the internal electrodes float; eliminating their potentials
+exactly gives (``b_i`` the signed ply columns, ``C_i`` their capacitances)
+``C_s = (sum 1/C_i)^-1``, ``b_s = C_s sum b_i / C_i`` and a stiffening of the
+short-circuited structure ``dK = sum b_i b_i' / C_i - b_s b_s' / C_s`` (positive
+semi-definite; zero when all ``b_i / C_i`` are equal, e.g. the pure bending of a
+symmetric series bimorph). :func:`series_stiffness` gives ``dK``; :func:`mvtk.fe.build_model`
+adds it to ``K``.
 
 References
 ----------
@@ -77,6 +85,7 @@ __all__ = [
     "piezo_coupling",
     "ply_piezo_constants",
     "modal_emcc",
+    "series_stiffness",
     "select_region",
     "stacked_laminate",
     "REGION_SHAPES",
@@ -116,12 +125,15 @@ class Electrode:
         Indices of the piezo plies in the patch's laminate (bottom = 0).
     signs : tuple of float, optional
         ``+1`` (default) or ``-1`` per ply: the ply voltage along its poling is
-        ``sign * V``.
+        ``sign * V`` (parallel), or its share of ``V`` (series).
+    wiring : {"parallel", "series"}
+        Series needs every ply's ``eps33`` (module notes).
     """
 
     name: str
     plies: tuple[int, ...]
     signs: tuple[float, ...] | None = None
+    wiring: str = "parallel"
 
     def __post_init__(self) -> None:
         plies = tuple(int(p) for p in self.plies)
@@ -134,6 +146,9 @@ class Electrode:
                                  f"ply ({len(plies)}), got {self.signs!r}")
         if len(set(plies)) != len(plies):
             raise ParameterError(f"electrode {self.name!r}: ply listed twice in {plies}")
+        if self.wiring not in ("parallel", "series"):
+            raise ParameterError(f"electrode {self.name!r}: wiring must be 'parallel' or "
+                                 f"'series', got {self.wiring!r}")
         object.__setattr__(self, "plies", plies)
         object.__setattr__(self, "signs", signs)
 
@@ -290,7 +305,8 @@ def _polygon_gradients(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
     return gx, gy, area
 
 
-def _patch_columns(nodes: np.ndarray, patch: ShellPiezoPatch) -> tuple[np.ndarray, ...]:
+def _patch_columns(nodes: np.ndarray, patch: ShellPiezoPatch, with_correction: bool = False
+                   ) -> tuple:
     """All-DOF load per volt (6 n_nodes, n_e), capacitances (n_e,), area of a patch."""
     zi = patch.laminate.z_interfaces
     plies = patch.laminate.plies
@@ -305,11 +321,11 @@ def _patch_columns(nodes: np.ndarray, patch: ShellPiezoPatch) -> tuple[np.ndarra
         dofs = (el[:, :, None] * 6 + np.arange(6)).reshape(len(el), -1)
         geo.append((el.shape[1], T, gx, gy, area, dofs))
     total_area = float(sum(g[4].sum() for g in geo))
-    cols, caps = [], []
+    cols, caps, corr = [], [], []
     for e in patch.electrodes:
-        col = np.zeros(n_all)
-        cap = 0.0
+        ply_cols, ply_caps = [], []
         for j, s in zip(e.plies, e.signs):
+            col = np.zeros(n_all)
             ebar, eps = ply_piezo_constants(plies[j])
             zm = 0.5 * (zi[j] + zi[j + 1])
             N, Mm = s * ebar, s * zm * ebar
@@ -321,9 +337,24 @@ def _patch_columns(nodes: np.ndarray, patch: ShellPiezoPatch) -> tuple[np.ndarra
                 f[:, :, 3] = -(Mm[1] * gy + Mm[2] * gx)   # beta_y = -rx
                 fg = np.einsum("eji,ej->ei", T, f.reshape(len(dofs), 6 * k))
                 np.add.at(col, dofs.ravel(), fg.ravel())
-            cap += np.nan if eps is None else eps * total_area / plies[j].thickness
-        cols.append(col)
-        caps.append(cap)
+            ply_cols.append(col)
+            ply_caps.append(np.nan if eps is None else eps * total_area / plies[j].thickness)
+        ply_caps = np.asarray(ply_caps)
+        if e.wiring == "parallel" or len(e.plies) == 1:
+            cols.append(np.sum(ply_cols, axis=0))
+            caps.append(float(np.sum(ply_caps)))
+            continue
+        if np.any(~np.isfinite(ply_caps)):
+            raise ParameterError(f"patch {patch.name!r}: electrode {e.name!r} wired in "
+                                 "series needs eps33 of every ply's material (F/m)")
+        cs = 1.0 / np.sum(1.0 / ply_caps)
+        bs = cs * np.sum([c / ci for c, ci in zip(ply_cols, ply_caps)], axis=0)
+        cols.append(bs)
+        caps.append(float(cs))
+        corr += [(c / np.sqrt(ci), 1.0) for c, ci in zip(ply_cols, ply_caps)]
+        corr.append((bs / np.sqrt(cs), -1.0))
+    if with_correction:
+        return np.column_stack(cols), np.asarray(caps), total_area, corr
     return np.column_stack(cols), np.asarray(caps), total_area
 
 
@@ -364,14 +395,40 @@ def piezo_coupling(model: FEModel, patches: Sequence[ShellPiezoPatch] | None = N
             areas.append(a)
     if len(set(names)) != len(names):
         raise ParameterError(f"electrode names repeat across patches: {names}")
-    b_all = np.hstack(cols)
-    R = model.meta.get("recovery")
-    if R is not None:
-        B = np.asarray(R.T @ b_all)
-    else:
-        B = b_all[model.dof_node * 6 + model.dof_component]
+    B = _free(model, np.hstack(cols))
     return PiezoCoupling(tuple(names), tuple(owner), B, np.concatenate(caps),
                          np.asarray(areas, dtype=float))
+
+
+def _free(model: FEModel, b_all: np.ndarray) -> np.ndarray:
+    """All-DOF columns (6 n_nodes, k) to the model's free DOFs."""
+    R = model.meta.get("recovery")
+    if R is not None:
+        return np.asarray(R.T @ b_all)
+    return b_all[model.dof_node * 6 + model.dof_component]
+
+
+def series_stiffness(model: FEModel, patches: Sequence[ShellPiezoPatch] | None = None
+                     ) -> sp.csr_matrix | None:
+    """Stiffening ``dK`` of the floating internal electrodes of series-wired electrodes.
+
+    Returns None when no electrode is wired in series (module notes for ``dK``).
+    """
+    if patches is None:
+        patches = model.meta.get("piezo_patches") or ()
+    us, ws = [], []
+    for p in patches:
+        if not any(e.wiring == "series" and len(e.plies) > 1 for e in p.electrodes):
+            continue
+        *_, corr = _patch_columns(model.nodes, p, with_correction=True)
+        for u, w in corr:
+            us.append(u)
+            ws.append(w)
+    if not us:
+        return None
+    U = sp.csr_matrix(_free(model, np.column_stack(us)))
+    dK = (U @ sp.diags(ws) @ U.T).tocsr()
+    return ((dK + dK.T) * 0.5).tocsr()
 
 
 def modal_emcc(model: FEModel, coupling: PiezoCoupling | None = None, n_modes: int = 6,

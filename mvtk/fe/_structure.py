@@ -439,7 +439,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
         model = _plate_piezo(model, s.get("patches", []), patches, len(layers))
-        return constrain_model(model, general, ())
+        return _with_series(constrain_model(model, general, ()))
     except ConfigError:
         raise
     except MvtkError as err:
@@ -728,9 +728,10 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if source is not None:
         meta["source"] = source
     try:
-        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
-                          members=members, supports=_supports(b), node_sets=node_sets,
-                          name=str(s.get("name", "")), meta=meta)
+        return _with_series(mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                                       members=members, supports=_supports(b),
+                                       node_sets=node_sets, name=str(s.get("name", "")),
+                                       meta=meta))
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
@@ -871,7 +872,10 @@ def _electrodes(p: Mapping, where: str, name: str, patch_plies, stack_index):
         w = f"{where}electrodes[{j}]"
         if not isinstance(e, Mapping):
             raise ConfigError(f"{w}: expected a table with name and plies")
-        _check_keys(e, w, ("name", "plies", "signs"))
+        _check_keys(e, w, ("name", "plies", "signs", "wiring"))
+        if e.get("wiring", "parallel") not in ("parallel", "series"):
+            raise ConfigError(f"{w}.wiring: expected 'parallel' or 'series', got "
+                              f"{e.get('wiring')!r}")
         plies = e.get("plies")
         if not isinstance(plies, list) or not plies:
             raise ConfigError(f"{w}.plies: the electrode is wired to no ply; expected a "
@@ -893,7 +897,8 @@ def _electrodes(p: Mapping, where: str, name: str, patch_plies, stack_index):
             raise ConfigError(f"{w}.name: expected a non-empty string, got {ename!r}")
         try:
             out.append(Electrode(ename, tuple(stack_index[k] for k in plies),
-                                 None if signs is None else tuple(signs)))
+                                 None if signs is None else tuple(signs),
+                                 e.get("wiring", "parallel")))
         except MvtkError as err:
             raise ConfigError(f"{w}: {err}") from err
     return tuple(out)
@@ -1054,3 +1059,18 @@ def _plate_piezo(model: FEModel, raw: list, patches: list, n_base: int) -> FEMod
     if not out:
         return model
     return replace(model, meta=dict(model.meta, piezo_patches=tuple(out)))
+
+
+def _with_series(model: FEModel) -> FEModel:
+    """Add the stiffening of series-wired electrodes' floating internal electrodes."""
+    from ._electro import series_stiffness
+
+    if not model.meta.get("piezo_patches"):
+        return model
+    try:
+        dK = series_stiffness(model)
+    except MvtkError as err:
+        raise ConfigError(f"patches: {err}") from err
+    if dK is None:
+        return model
+    return replace(model, K=(model.K + dK).tocsr())

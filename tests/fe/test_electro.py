@@ -257,3 +257,102 @@ def test_unimorph_on_the_generated_plate_matches_the_uniform_strain_beam():
              for k, p in enumerate(stack))
     kappa = -Mp / EI
     assert w == pytest.approx(kappa * (c - a) * ((c - a) / 2 + L - c), rel=0.01)
+
+
+def test_series_bimorph_from_the_structure_toml_matches_smits():
+    """Smits et al. (1991), series bimorph: tip deflection per volt 3/2 d31 L^2 / h^2 and
+    capacitance C_ply / 2; the floating middle electrode stiffens only the stretching
+    (build_model adds it to K)."""
+    L, b, t, d31 = 0.04, 0.005, 0.25e-3, -210e-12
+    pz = {"E": 66.667e9, "nu": 0.0, "rho": 7800.0, "d31": d31, "eps33": 2400 * EPS0}
+    desc = {
+        "materials": {"pz": pz, "skin": {"E": 1e3, "nu": 0.0, "rho": 1.0}},
+        "structure": {"type": "plate", "length": L, "width": b,
+                      "layers": [{"material": "skin", "thickness": 1e-9}]},
+        "patches": [{"name": "bim", "x0": 0.0, "x1": L, "y0": 0.0, "y1": b,
+                     "layers": [{"material": "pz", "thickness": t},
+                                {"material": "pz", "thickness": t}],
+                     "electrodes": [{"name": "V", "plies": [0, 1], "signs": [-1, 1],
+                                     "wiring": "series"}]}],
+        "mesh": {"nx": 40, "ny": 2},
+        "boundary": {"clamp": "x0"},
+    }
+    m = build_model(desc)
+    cp = piezo_coupling(m)
+    w = m.expand(static_solve(m, cp.B[:, 0]))[m.node_set("x1"), 2].mean()
+    assert w == pytest.approx(1.5 * abs(d31) * L**2 / (2 * t) ** 2, rel=0.01)
+    eps_s = 2400 * EPS0 - 2 * d31**2 * 66.667e9
+    assert cp.C[0] == pytest.approx(eps_s * L * b / t / 2, rel=1e-9)
+    desc["patches"][0]["electrodes"][0]["wiring"] = "parallel"
+    m_par = build_model(desc)
+    assert abs(m.K - m_par.K).max() > 0  # the floating electrode stiffens
+    desc["patches"][0]["electrodes"][0]["wiring"] = "star"
+    with pytest.raises(ConfigError, match=r"patches\[0\]\.electrodes\[0\]\.wiring"):
+        build_model(desc)
+
+
+def _plate_mesh_file(path, L=0.1, b=0.02, nx=20, ny=4, x0=0.02, x1=0.06):
+    import meshio
+
+    nodes, quads = _strip(L, b, nx, ny)
+    cen = nodes[quads].mean(axis=1)
+    inside = (cen[:, 0] > x0) & (cen[:, 0] < x1)
+    m = meshio.Mesh(nodes, [("quad", quads)],
+                    cell_sets={"plate": [np.flatnonzero(~inside | inside)],
+                               "pz": [np.flatnonzero(inside)]},
+                    point_sets={"x0": np.flatnonzero(nodes[:, 0] == 0)})
+    m.write(path, file_format="abaqus")
+    return path
+
+
+def _mesh_desc(path, patch):
+    return {
+        "materials": {"al": {"E": 70e9, "nu": 0.33, "rho": 2700.0},
+                      "pz": {"E": 66.667e9, "nu": 0.34, "rho": 7800.0, "d31": -210e-12,
+                             "eps33": 2400 * EPS0}},
+        "structure": {"type": "mesh"},
+        "mesh": {"file": str(path), "sections": {"plate": "skin"}},
+        "sections": {"skin": {"layers": [{"material": "al", "thickness": 1e-3}]}},
+        "patches": [dict(name="pz", layers=[{"material": "pz", "thickness": 0.2e-3}],
+                         **patch)],
+        "boundary": {"supports": {"x0": "clamped"}},
+    }
+
+
+def test_patch_by_element_set_region_and_generated_plate_agree(tmp_path):
+    f = _plate_mesh_file(tmp_path / "plate.inp")
+    by_set = build_model(_mesh_desc(f, {"element_set": "pz"}))
+    box = {"shape": "box", "origin": [0.04, 0.01, 0.0], "u": [-0.02, 0.02],
+           "v": [-0.011, 0.011]}
+    by_box = build_model(_mesh_desc(f, {"region": box}))
+    poly = {"shape": "polygon", "origin": [0.04, 0.01, 0.0],
+            "points": [[-0.02, -0.011], [0.02, -0.011], [0.02, 0.011], [-0.02, 0.011]]}
+    by_poly = build_model(_mesh_desc(f, {"region": poly}))
+    c_set, c_box, c_poly = (piezo_coupling(m) for m in (by_set, by_box, by_poly))
+    assert np.array_equal(c_set.B, c_box.B) and np.array_equal(c_set.B, c_poly.B)
+    assert c_set.area[0] == pytest.approx(0.04 * 0.02, rel=1e-12)
+    # the same patch on the generated plate
+    gen = build_model({
+        "materials": _mesh_desc(f, {})["materials"],
+        "structure": {"type": "plate", "length": 0.1, "width": 0.02,
+                      "layers": [{"material": "al", "thickness": 1e-3}]},
+        "patches": [{"name": "pz", "x0": 0.02, "x1": 0.06, "y0": 0.0, "y1": 0.02,
+                     "layers": [{"material": "pz", "thickness": 0.2e-3}]}],
+        "mesh": {"nx": 20, "ny": 4}, "boundary": {"clamp": "x0"}})
+    c_gen = piezo_coupling(gen)
+    assert c_gen.C[0] == pytest.approx(c_set.C[0], rel=1e-12)
+
+    def tip(m, c):
+        return m.expand(static_solve(m, c.B[:, 0]))[np.isclose(m.nodes[:, 0], 0.1), 2].mean()
+
+    assert tip(by_set, c_set) == pytest.approx(tip(gen, c_gen), rel=1e-9)
+    # a circle selects the element centroids within its radius
+    circ = build_model(_mesh_desc(f, {"region": {"shape": "circle",
+                                                 "origin": [0.05, 0.01, 0.0],
+                                                 "radius": 0.012}}))
+    els = circ.meta["piezo_patches"][0].elements[0]
+    cen = circ.nodes[els].mean(axis=1)
+    assert np.all(np.hypot(cen[:, 0] - 0.05, cen[:, 1] - 0.01) <= 0.012)
+    nodes, quads = _strip(0.1, 0.02, 20, 4)
+    allc = nodes[quads].mean(axis=1)
+    assert len(els) == np.sum(np.hypot(allc[:, 0] - 0.05, allc[:, 1] - 0.01) <= 0.012)
