@@ -356,3 +356,26 @@ def test_patch_by_element_set_region_and_generated_plate_agree(tmp_path):
     nodes, quads = _strip(0.1, 0.02, 20, 4)
     allc = nodes[quads].mean(axis=1)
     assert len(els) == np.sum(np.hypot(allc[:, 0] - 0.05, allc[:, 1] - 0.01) <= 0.012)
+
+
+def test_bimorph_in_cylindrical_bending_gains_one_plus_nu():
+    """With nu != 0 and the lateral edges held in plane strain (uy = rx = 0), the
+    parallel bimorph bends as a plate: moment E d31 V t / (1 - nu) over D = E h^3 /
+    (12 (1 - nu^2)), i.e. (1 + nu) times Smits' beam value 3 d31 L^2 / h^2 (Poisson part
+    of e31* = Q11 d31 + Q12 d32)."""
+    L, b, t, d31, nu = 0.04, 0.01, 0.25e-3, -210e-12, 0.34
+    pz = {"E": 66.667e9, "nu": nu, "rho": 7800.0, "d31": d31}
+    desc = {
+        "materials": {"pz": pz, "skin": {"E": 1e3, "nu": 0.0, "rho": 1.0}},
+        "structure": {"type": "plate", "length": L, "width": b,
+                      "layers": [{"material": "skin", "thickness": 1e-9}]},
+        "patches": [{"name": "bim", "x0": 0.0, "x1": L, "y0": 0.0, "y1": b,
+                     "layers": [{"material": "pz", "thickness": t},
+                                {"material": "pz", "thickness": t}],
+                     "electrodes": [{"name": "V", "plies": [0, 1], "signs": [-1, 1]}]}],
+        "mesh": {"nx": 40, "ny": 2},
+        "boundary": {"clamp": "x0", "edges": {"y0": ["uy", "rx"], "y1": ["uy", "rx"]}},
+    }
+    m = build_model(desc)
+    w = m.expand(static_solve(m, piezo_coupling(m).B[:, 0]))[m.node_set("x1"), 2].mean()
+    assert w == pytest.approx((1 + nu) * 3 * abs(d31) * L**2 / (2 * t) ** 2, rel=0.01)
