@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 from scipy.sparse.linalg import splu
 
 from mvtk.fe import build_model, piezo_coupling
@@ -16,6 +17,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "fe"))
 from test_electro import _panel  # noqa: E402
 
 
+@pytest.mark.slow
 def test_se_voltage_to_charge_frf_matches_the_full_model():
     m = build_model(_panel())
     cp = piezo_coupling(m)
