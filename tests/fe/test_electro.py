@@ -13,6 +13,7 @@ from scipy.optimize import brentq
 from mvtk.errors import ConfigError, ParameterError
 from mvtk.fe import (
     Electrode,
+    IsotropicMaterial,
     Laminate,
     OrthotropicPiezoMaterial,
     PiezoMaterial,
@@ -416,3 +417,36 @@ def test_partial_width_patch_matches_3d_peer():
     peer = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(peer)
     assert abs(peer.solve(2, 2.5e-3)[0]) == pytest.approx(abs(SFEPY_TIP_PER_VOLT), rel=1e-6)
+
+
+def test_curved_triangles_rotate_with_the_model():
+    """MITC3 triangles on a cylinder: rotating nodes and material axis rotates every
+    nodal load per volt (force and moment vectors) and leaves the capacitance."""
+    th = np.linspace(-0.3, 0.3, 7)
+    xs = np.linspace(0.0, 0.1, 6)
+    X, TH = np.meshgrid(xs, th, indexing="ij")
+    nodes = np.column_stack([X.ravel(), 0.5 * np.sin(TH.ravel()), 0.5 * np.cos(TH.ravel())])
+    nt = len(th)
+    quads = np.array([[i * nt + j, (i + 1) * nt + j, (i + 1) * nt + j + 1, i * nt + j + 1]
+                      for i in range(len(xs) - 1) for j in range(nt - 1)])
+    tris = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    mfc = OrthotropicPiezoMaterial("MFC", 30.336e9, 15.857e9, 5.515e9, 5.515e9, 5.515e9,
+                                   0.31, 5440.0, d31=-2.1e-10, d32=-1.6e-10, eps33=1e-8)
+    lam = Laminate((Ply(IsotropicMaterial("al", 70e9, 0.33, 2700.0), 1e-3),
+                    Ply(mfc, 0.3e-3, 30.0)))
+    R = _rot([0.4, 0.9, -0.2])
+
+    def coupling(xyz, axis):
+        m = assemble_model(xyz, [ShellSet(tris, lam, axis)])
+        p = ShellPiezoPatch("p", tris, lam, axis, electrodes=(Electrode("e", (1,)),))
+        c = piezo_coupling(m, [p])
+        return m.expand(c.B[:, 0]), c.C[0]
+
+    b0, c0 = coupling(nodes, (1.0, 0.0, 0.0))
+    b1, c1 = coupling(nodes @ R.T, tuple(R @ [1.0, 0.0, 0.0]))
+    assert c1 == pytest.approx(c0, rel=1e-12)
+    scale = np.abs(b0).max()
+    assert np.max(np.abs(b1[:, :3] - b0[:, :3] @ R.T)) <= 1e-10 * scale
+    assert np.max(np.abs(b1[:, 3:] - b0[:, 3:] @ R.T)) <= 1e-10 * scale
+    # a free body: the loads per volt are self-equilibrated (no net force)
+    assert np.max(np.abs(b0[:, :3].sum(axis=0))) <= 1e-10 * scale
