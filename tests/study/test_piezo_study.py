@@ -39,3 +39,27 @@ def test_piezo_control_keys_are_checked(tmp_path):
     bad.write_text(text)
     with pytest.raises(ConfigError, match="control.sensors"):
         load_study(bad)
+
+
+def test_init_template_of_a_mesh_offers_piezo_patches(tmp_path):
+    """The structure TOML `mvtk init` writes around a mesh carries a commented patch
+    template; uncommented, it builds electrodes on the mesh."""
+    import shutil
+
+    from mvtk.fe import build_model, piezo_coupling
+    from mvtk.study._init import mesh_structure_toml
+
+    src = STUDY.parent.parent / "structures" / "curved_panel" / "curved_panel.msh"
+    shutil.copy(src, tmp_path / "panel.msh")
+    text = mesh_structure_toml(tmp_path / "panel.msh", tmp_path)
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("# ") and any(k in line for k in (
+                "[materials.pic151]", "E = 66.667e9", "nu = 0.34", "rho = 7800", "d31 =",
+                "eps33 =", "[[patches]]", 'name = "pzt"', "element_set =", "layers = [{",
+                'side = "top"')):
+            line = line[2:]
+        lines.append(line)
+    (tmp_path / "structure.toml").write_text("\n".join(lines))
+    cp = piezo_coupling(build_model(tmp_path / "structure.toml"))
+    assert cp.names == ("pzt",) and cp.C[0] > 0
