@@ -537,6 +537,16 @@ def _section_control(rep: Report, res: StudyResult) -> None:
             f"up to {act['plant_fn_max_hz']:.0f} Hz plus the static residual of the others). "
             f"Actuator limit: +-{c['actuator_limit_v']:g} V (PIC 151, 0.25 mm: the "
             "-0.4 kV/mm field limit against the poling direction, used for both signs).")
+        if act.get("tip_per_volt_shell_coupled_m") is not None:
+            w_c, w_e = act["tip_per_volt_shell_coupled_m"], act["tip_per_volt_edge_lines_m"]
+            sec.text(
+                "Cross-check: the same patch coupled in the shells (mvtk.fe.piezo_coupling, "
+                "the biaxial induced strain of the piezo ply, no pin-force idealisation) "
+                f"deflects the tip by {1e6 * w_c:.4g} um/V, {100 * (w_c / w_e - 1):+.0f} % "
+                "against the edge-line moments: the plate around the patch holds it "
+                "laterally, so it bends the plate with the factor 1 + nu of cylindrical "
+                "bending that the beam-like eq. 3 leaves out. The plant keeps the paper's "
+                "pin-force model (its numbers are the paper's method).")
     sec.text("The SE plant is released from its first mode with a tip displacement of "
              f"{cfg['initial_tip_displacement_m']:g} m and the controllers are switched on "
              "at t = 0. Peak voltage in V and the equivalent edge moment in N m (the paper "

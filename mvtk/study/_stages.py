@@ -651,6 +651,15 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         u = static_solve(model, np.column_stack([load, line.load_vector(model)]))
         act["tip_per_volt_nodes_m"] = float(tip_row @ u[:, 0])
         act["tip_per_volt_edge_lines_m"] = float(tip_row @ u[:, 1])
+        if model.meta.get("piezo_patches"):
+            # the same patch coupled in the shells (biaxial induced strain), a printed
+            # cross-check of the pin-force idealisation the plant keeps
+            from ..fe import piezo_coupling
+
+            cpl = piezo_coupling(model)
+            if act["name"] in cpl.names:
+                b = cpl.B[:, cpl.names.index(act["name"])]
+                act["tip_per_volt_shell_coupled_m"] = float(tip_row @ static_solve(model, b))
         n_plant = min(int(cfg.get("plant_modes", 12)), se.n_dof)
         # modal form: shell drilling rotations of the boundary have no inertia (singular
         # physical M); n_plant modes + the static residual of the others (exact DC gain)
