@@ -69,3 +69,30 @@ def test_ppf_from_the_collocated_charge_sensor_is_stable_on_the_full_model(panel
     assert r.stable_design and r.stable_evaluation
     e = added_damping(full, ppf, mode=5, design_plant=design)
     assert e["added"] == pytest.approx(d["added"], rel=0.15)
+
+
+def test_mimo_lqr_over_two_patches(panel):
+    """LQR over both patches of the pair (each driven by its voltage): the two-input
+    Riccati gain stabilises and damps the patch mode (336 Hz) more than either patch
+    alone (measured zeta 0.022 vs 0.018 and 0.017, open loop 0.010); one input gives the
+    single-actuator gain."""
+    from mvtk.control import LQR
+
+    m, cp, se = panel
+    plant = piezo_plant(se, cp, ["act", "sen"], "sen", form="modal", n_modes=6,
+                        modal_damping=0.01)
+
+    def zeta(actuators):
+        p = LQR(R=1e-6, actuator=actuators).closed_loop_poles(plant)
+        assert np.all(p.real < 0)
+        p = p[p.imag > 0]
+        p = p[np.argsort(np.abs(p))]
+        return -p.real / np.abs(p)
+
+    both, act, sen = zeta(["act", "sen"]), zeta(["act"]), zeta(["sen"])
+    assert both[4] > max(act[4], sen[4]) and both[4] > 0.02
+    assert LQR(R=1e-6, actuator=["act", "sen"]).gain_matrix(plant).shape == (2, 12)
+    assert np.allclose(LQR(R=1e-6, actuator=["act"]).gain_matrix(plant),
+                       LQR(R=1e-6, actuator="act").gain_matrix(plant))
+    with pytest.raises(ParameterError, match="use gain_matrix"):
+        LQR(actuator=["act", "sen"]).realize(plant)
