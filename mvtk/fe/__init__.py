@@ -8,6 +8,15 @@ from ._assembly import (
     sparsity_pattern,
 )
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
+from ._electro import (
+    Electrode,
+    PiezoCoupling,
+    ShellPiezoPatch,
+    modal_emcc,
+    piezo_coupling,
+    ply_piezo_constants,
+    select_region,
+)
 from ._frames import CoordinateSystem
 from ._general import (
     GENERAL_SUPPORTS,
@@ -29,7 +38,14 @@ from ._loads import (
     pressure_nodal,
     static_solution,
 )
-from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._materials import (
+    IsotropicMaterial,
+    OrthotropicMaterial,
+    OrthotropicPiezoMaterial,
+    PiezoMaterial,
+    Ply,
+    is_piezo,
+)
 from ._matrices import read_matrices
 from ._mesh import (
     SUPPORT_TYPES,
@@ -109,6 +125,15 @@ __all__ = [
     "IsotropicMaterial",
     "OrthotropicMaterial",
     "PiezoMaterial",
+    "OrthotropicPiezoMaterial",
+    "is_piezo",
+    "Electrode",
+    "ShellPiezoPatch",
+    "PiezoCoupling",
+    "piezo_coupling",
+    "ply_piezo_constants",
+    "modal_emcc",
+    "select_region",
     "Ply",
     "Laminate",
     "DRILL_FACTOR",

@@ -17,7 +17,8 @@ module adds the cross-key rules and resolves the files. Overview (see
     [updating]         targets_hz, max_iter, [[updating.parameters]] path, initial,
                        lower, upper
     [reduction]        n_modes, n_compare, plant_modes, [[reduction.retained]] name, xyz
-    [control]          actuator_nodes, sensor_node, patch, actuator_limit_v,
+    [control]          actuator_nodes | actuators + sensors (+ sensing, zeta),
+                       sensor_node, patch, actuator_limit_v,
                        initial_tip_displacement_m, t_end_s, fs_out, settle_band,
                        [[control.controllers]] name, type, ... (gains and u_max in V)
     [uncertainty]      optional Monte-Carlo propagation on the updated structure:
@@ -203,7 +204,16 @@ def load_study(path: str | Path) -> Study:
             raise ConfigError("[control] needs a [reduction] section (the plant is the SE)")
         known = {str(it["name"]) for it in cfg["reduction"]["retained"]
                  if isinstance(it, Mapping) and it.get("name") is not None}
+        if c.get("actuators") is None and c.get("actuator_nodes") is None:
+            raise ConfigError("control.actuator_nodes: required (the two retained "
+                              "actuator-edge nodes), or name piezo patches in "
+                              "control.actuators")
+        if c.get("actuators") is not None and c.get("sensors") is None:
+            raise ConfigError("control.sensors: required with control.actuators (the "
+                              "piezo patches or electrodes the controllers read)")
         for key in ("actuator_nodes", "sensor_node"):
+            if c.get(key) is None:
+                continue
             val = c[key]
             vals = val if isinstance(val, list) else [val]
             bad = [v for v in vals if v not in known]

@@ -16,6 +16,7 @@ commented candidate for a beam section or a support.
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -556,6 +557,25 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
                 "# height = 0.01           # m",
                 "# orientation = [0, 0, 1] # EDIT: a direction not along the beam",
                 ""]
+    example = shells[0] if shells else "<element set>"
+    out += [
+        "# Piezo patches (optional): bonded on an element set of surface cells or on a",
+        "# region of the surface (box, circle or polygon in the tangent plane at origin);",
+        "# their piezo plies become electrodes (docs: 'Piezo patches on any shell').",
+        "# [materials.pic151]       # PI Ceramic PIC 151 datasheet values",
+        "# E = 66.667e9",
+        "# nu = 0.34",
+        "# rho = 7800",
+        "# d31 = -210e-12          # m/V",
+        "# eps33 = 2.125e-8        # F/m (2400 eps0)",
+        "# [[patches]]",
+        '# name = "pzt"',
+        f"# element_set = {json.dumps(example)}   # or:",
+        '# # region = { shape = "box", origin = [x, y, z], u = [-0.02, 0.02], v = [-0.01, 0.01] }',
+        '# layers = [{ material = "pic151", thickness = 0.25e-3 }]   # from the base outwards',
+        '# side = "top"',
+        "",
+    ]
     node_sets = sorted(m.node_sets)
     out += [
         "[boundary]",
