@@ -21,6 +21,7 @@ __all__ = [
     "ParameterError",
     "ConvergenceError",
     "MissingDependencyError",
+    "OutputError",
     "MvtkWarning",
     "DataRepairWarning",
     "ResolutionWarning",
@@ -64,6 +65,14 @@ class ConvergenceError(MvtkError, RuntimeError):
 
 class MissingDependencyError(MvtkError, ImportError):
     """An optional dependency needed for this feature is not installed."""
+
+
+class OutputError(MvtkError, OSError):
+    """An output file could not be written, or would replace an input file.
+
+    The message names the file and the cause (disk full, file-size limit, permission,
+    the output being one of the inputs); the previous file is unchanged.
+    """
 
 
 class MvtkWarning(UserWarning):

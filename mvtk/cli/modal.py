@@ -145,6 +145,13 @@ def run(args: argparse.Namespace) -> int:
     from ._common import spare_dask_probe
 
     spare_dask_probe()
+    from ._common import check_output_file, refuse_inputs
+
+    outputs = [("--uff-modes", args.uff_modes), ("--uff-frf", args.uff_frf)]
+    for opt, path in outputs:
+        if path:
+            check_output_file(path, opt)
+    refuse_inputs(outputs, args.files)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         modes = _identify(args)

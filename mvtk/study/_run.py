@@ -554,6 +554,9 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
                               failed=dict(failed), cache_hits=hits,
                               timings_s=dict(timings))
         report_path = build_report(partial, hashes)
+        from ._manifest import write_manifest
+
+        write_manifest(out, report_path)   # last: it vouches for what was written
     timings["report"] = time.perf_counter() - t0
     cpu["report"] = time.process_time() - c0
     if report:
