@@ -28,6 +28,7 @@ __all__ = [
     "ModeOverlapWarning",
     "IdentifiabilityWarning",
     "AccuracyWarning",
+    "ModelWarning",
 ]
 
 
@@ -97,3 +98,8 @@ class IdentifiabilityWarning(MvtkWarning):
 
 class AccuracyWarning(MvtkWarning):
     """A result is outside the range where the method is known to be accurate."""
+
+
+class ModelWarning(MvtkWarning):
+    """A structural model looks implausible (units, mesh density, cracks); the message
+    names the entity and the likely cause."""
