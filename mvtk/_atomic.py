@@ -27,7 +27,7 @@ from pathlib import Path
 from .errors import OutputError
 
 __all__ = ["atomic_path", "write_bytes", "write_text", "write_error", "refuse_input",
-           "same_file", "check_room", "TEMP_SUFFIX"]
+           "same_file", "check_room", "special_file", "TEMP_SUFFIX"]
 
 #: Suffix of the temporary files (``.<name>.<random>.tmp``), so an interrupted run's
 #: leftovers can be recognised and removed.
@@ -213,6 +213,25 @@ def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
 def write_text(path: str | os.PathLike, text: str, encoding: str = "utf-8") -> Path:
     """Write ``text`` to ``path`` atomically (see :func:`atomic_path`); return the path."""
     return write_bytes(path, text.encode(encoding))
+
+
+def special_file(path: str | os.PathLike) -> str | None:
+    """What ``path`` is when it exists but is not a regular file or folder, else None.
+
+    A FIFO, socket or device never ends (or blocks until a writer comes): readers refuse
+    it before opening it.
+    """
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return None
+    if stat.S_ISREG(mode) or stat.S_ISDIR(mode):
+        return None
+    for test, name in ((stat.S_ISFIFO, "a named pipe (FIFO)"), (stat.S_ISSOCK, "a socket"),
+                       (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device")):
+        if test(mode):
+            return name
+    return "a special file"
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:

@@ -570,7 +570,11 @@ def read_test_geometry(source: str | Path | Mapping[str, Any], *, units_scale: f
         path = Path(source)
         ext = path.suffix.lower()
         if not path.is_file():
-            raise FormatError(f"{path}: test geometry file not found")
+            from .._atomic import special_file
+
+            kind = special_file(path)
+            raise FormatError(f"{path}: test geometry file " + (
+                "not found" if kind is None else f"is {kind}, expected a regular file"))
         if ext in (".uff", ".unv", ".uf"):
             geo = _from_uff(path, units_scale)
         elif ext == ".toml":

@@ -135,7 +135,8 @@ def _finite(da: xr.DataArray, path: Path) -> xr.DataArray:
     if bad.any():
         m, k = (int(v[0]) for v in np.nonzero(bad))
         n = int(bad.any(axis=1).sum())
+        value = np.asarray(da.values)[m, k].item()
         raise FormatError(f"{path}: shape value of mode {da['mode'].values[m]!s} at DOF "
-                          f"{da['dof'].values[k]!s} is {da.values[m, k]!r} ({int(bad.sum())} "
+                          f"{da['dof'].values[k]!s} is {value!r} ({int(bad.sum())} "
                           f"non-finite value(s) in {n} mode(s)); a MAC needs every value")
     return da

@@ -543,10 +543,17 @@ def modal_analysis(
                      (2 * np.pi * 1e-3) ** 2)
         rigid = np.abs(w2) < thresh
         low = np.abs(w2[~rigid])
+        bound = _trial_scale_bound(model) if low.size else np.inf
+        if np.isfinite(bound) and bound > 0:
+            # zero-energy modes by a scale that does not depend on how many modes were
+            # asked for (the largest computed eigenvalue does): the pieces of a cracked
+            # mesh move rigidly whether -n is 6 or 8
+            rigid |= np.abs(w2) < 1e-7 * bound
+            low = np.abs(w2[~rigid])
         # the candidates below need |omega2| < 1e-5 q; the minimum over four of the
         # trial fields bounds q from above, and when no mode is below 1e-5 of that
         # bound, none is a candidate and q is not needed (clamped structures)
-        if low.size and (memo or low.min() < 1e-5 * _trial_scale_bound(model)):
+        if low.size and (memo or low.min() < 1e-5 * bound):
             trial_q = trial()
         else:
             trial_q = np.inf
