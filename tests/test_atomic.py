@@ -184,3 +184,26 @@ def test_every_writer_keeps_the_previous_file_on_a_write_failure(tmp_path):
     assert doc["changed"] == [], doc["changed"]
     # no temporary file left behind (the PDF writer's is removed too)
     assert doc["extra"] == [], doc["extra"]
+
+
+def test_mvtk_read_onto_an_existing_netcdf_under_a_file_size_limit(tmp_path):
+    """Formerly a segmentation fault inside h5py with the old file gone."""
+    import resource
+
+    src = ROOT / "data" / "smart_beam" / "SYNTHETIC_smart_beam_impact.csv"
+    out = tmp_path / "old.nc"
+    out.write_bytes(b"the previous netCDF")
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_FSIZE, (65536, resource.RLIM_INFINITY))
+
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.run([sys.executable, "-m", "mvtk", "read", str(src), "-o", str(out)],
+                          capture_output=True, text=True, timeout=120, env=env,
+                          preexec_fn=limit)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == (f"mvtk read: error: {out}: could not be written: file-size limit "
+                           "exceeded (ulimit -f) or file too large; the previous file (if "
+                           "any) is unchanged\n")
+    assert out.read_bytes() == b"the previous netCDF"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["old.nc"]
