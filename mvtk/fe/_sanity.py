@@ -23,7 +23,8 @@ import numpy as np
 
 from ..errors import ConfigError, ModelWarning, ParameterError
 
-__all__ = ["check_model", "check_matrices", "check_size", "ELEMENTS_PER_HALF_WAVE"]
+__all__ = ["check_model", "check_matrices", "check_size", "local_element_size",
+           "ELEMENTS_PER_HALF_WAVE"]
 
 #: Elements needed along a bending half-wave for frequencies within a few per cent
 #: (linear shells and beams; fewer give errors of tens of per cent).
@@ -216,7 +217,7 @@ def _far_points(model, desc: Mapping) -> None:
         xyz = np.array([float(p[k]) for k in "xyz"])
         node = int(nodes[0])
         dist = float(np.linalg.norm(model.nodes[node] - xyz))
-        tol = _local_size(model, node)
+        tol = local_element_size(model, node)
         if dist > tol * (1 + 1e-9):
             lo, hi = model.nodes.min(axis=0), model.nodes.max(axis=0)
             raise ConfigError(
@@ -227,8 +228,12 @@ def _far_points(model, desc: Mapping) -> None:
                 f"{np.round(lo, 6).tolist()} to {np.round(hi, 6).tolist()} m)")
 
 
-def _local_size(model, node: int) -> float:
-    """Longest edge (m) of the elements around ``node``."""
+def local_element_size(model, node: int) -> float:
+    """Longest edge (m) of the elements around ``node`` (the local mesh size).
+
+    Falls back to the distance to the nearest other node when the model lists no
+    element connectivity.
+    """
     edges = []
     for conn in model.elements.values():
         conn = np.asarray(conn)
