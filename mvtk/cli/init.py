@@ -18,7 +18,7 @@ def _init(args: argparse.Namespace) -> int:
     writes = [("study.toml", folder / "study.toml")]
     if args.structure is None or Path(args.structure).suffix.lower() != ".toml":
         writes.append(("structure.toml", folder / "structure.toml"))
-    refuse_inputs([(f"mvtk init {args.folder}: {name}", p) for name, p in writes],
+    refuse_inputs([("output", p) for _, p in writes],
                   [args.structure, *args.measurements, args.geometry])
 
     res = init_study(args.folder, structure=args.structure, measurements=args.measurements,

@@ -581,6 +581,9 @@ def modal_analysis(
             labels.append(by_energy[i])
         else:
             labels.append(mode_type(model, vecs[:, i]))
+    from ._sanity import warn_under_resolved
+
+    warn_under_resolved(model, vecs, fn, rigid)
     return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
                        dof_node_id=np.asarray(model.node_ids)[model.dof_node],
                        dof_component=np.asarray(model.dof_component))

@@ -333,3 +333,76 @@ def check_model(model) -> Any:
     _coarse_mesh(model)
     _coincident_unconnected(model)
     return model
+
+
+# --------------------------------------------------------------- mode resolution
+#: Elements per half-wave a cubic (Hermite) beam element needs for about 1 % accuracy.
+BEAM_ELEMENTS_PER_HALF_WAVE = 2
+
+
+def elements_per_half_wave(model, vectors: np.ndarray, rigid: np.ndarray) -> np.ndarray:
+    """Elements per half-wave of each mode, relative to what its elements need.
+
+    A nodal line of a mode crosses about one element per half-wave along it, so the
+    share of elements inside which the mode changes sign is about one over the elements
+    per half-wave (summed over the directions of a plate mode). The dominant translation
+    of each mode is used; values below 1e-3 of its largest count as zero. Per element
+    kind, the result is ``1 / (share x needed)`` with ``needed`` =
+    ``ELEMENTS_PER_HALF_WAVE`` (4, linear shells) or ``BEAM_ELEMENTS_PER_HALF_WAVE`` (2,
+    cubic beams); the smallest over the kinds is returned (below 1: too coarse).
+    Rigid modes get ``inf``.
+
+    Returns
+    -------
+    ndarray, shape (n_modes,)
+    """
+    n_modes = vectors.shape[1]
+    out = np.full(n_modes, np.inf)
+    conns = [np.asarray(c) for c in model.elements.values()
+             if np.asarray(c).ndim == 2 and len(c)]
+    if not conns:
+        return out
+    dn, dc = np.asarray(model.dof_node), np.asarray(model.dof_component)
+    trans = dc < 3
+    for k in range(n_modes):
+        if rigid[k]:
+            continue
+        u = np.zeros((model.n_nodes, 3))
+        u[dn[trans], dc[trans]] = np.real(vectors[trans, k])
+        v = u[:, int(np.argmax((u ** 2).sum(axis=0)))]
+        tol = 1e-3 * float(np.abs(v).max(initial=0.0))
+        if tol <= 0:
+            continue
+        for conn in conns:
+            need = BEAM_ELEMENTS_PER_HALF_WAVE if conn.shape[1] == 2 else \
+                ELEMENTS_PER_HALF_WAVE
+            # a quad's two edge directions apart (its two mesh directions), else the
+            # element as a whole
+            groups = ([[0, 1], [3, 2]], [[1, 2], [0, 3]]) if conn.shape[1] == 4 else \
+                ([list(range(conn.shape[1]))],)
+            for edges in groups:
+                crossed = np.zeros(len(conn), dtype=bool)
+                for e in edges:
+                    ve = v[conn[:, e]]
+                    crossed |= (ve.max(axis=1) > tol) & (ve.min(axis=1) < -tol)
+                share = np.count_nonzero(crossed) / len(conn)
+                if share > 0:
+                    out[k] = min(out[k], 1.0 / (share * need))
+    return out
+
+
+def warn_under_resolved(model, vectors, fn_hz, rigid) -> list[int]:
+    """Warn (ModelWarning) about modes the mesh resolves with too few elements per
+    half-wave (:func:`elements_per_half_wave` below 1); return their 1-based numbers."""
+    rel = elements_per_half_wave(model, vectors, rigid)
+    bad = np.flatnonzero(rel < 1.0)
+    if bad.size:
+        shown = ", ".join(f"{k + 1} ({fn_hz[k]:.4g} Hz)" for k in bad[:6]) + (
+            f" and {bad.size - 6} more" if bad.size > 6 else "")
+        warnings.warn(
+            f"{_who(model)}: mode(s) {shown} have fewer elements per half-wave than their "
+            f"elements need (about {ELEMENTS_PER_HALF_WAVE} for shells, "
+            f"{BEAM_ELEMENTS_PER_HALF_WAVE} for beams), so these frequencies can be tens "
+            "of per cent off: refine the mesh or ask for fewer modes",
+            ModelWarning, stacklevel=3)
+    return [int(k) + 1 for k in bad]
