@@ -201,7 +201,7 @@ def check_room(path: str | os.PathLike, nbytes: int) -> None:
                           "previous file (if any) is unchanged")
 
 
-def write_bytes(path: str | os.PathLike, data: bytes) -> Path:
+def write_bytes(path: str | os.PathLike, data: bytes | memoryview) -> Path:
     """Write ``data`` to ``path`` atomically (see :func:`atomic_path`); return the path."""
     target = Path(path)
     with atomic_path(target) as tmp, open(tmp, "xb") as fh:

@@ -118,8 +118,7 @@ def write_h5netcdf(ds: xr.Dataset, path: Path) -> Path:
     """
     nbytes = int(ds.nbytes)
     if nbytes <= _IN_MEMORY_BYTES:
-        data = ds.to_netcdf(engine="h5netcdf")
-        return write_bytes(path, bytes(data))
+        return write_bytes(path, ds.to_netcdf(engine="h5netcdf"))   # a memoryview
     check_room(path, int(nbytes * 1.05) + 2**20)
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
