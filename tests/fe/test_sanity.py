@@ -80,7 +80,7 @@ def test_duplicate_point_names_are_refused(tmp_path):
         build_model(path)
 
 
-def _mesh_structure(tmp_path, nodes, quads, extra=""):
+def _mesh_structure(tmp_path, nodes, quads, extra="", clamped=True):
     meshio = pytest.importorskip("meshio")
     clamp = [i for i, p in enumerate(nodes) if p[0] == 0.0]
     clamp = sorted(clamp, key=lambda i: nodes[i][1])
@@ -95,7 +95,8 @@ def _mesh_structure(tmp_path, nodes, quads, extra=""):
                     '[structure]\ntype = "mesh"\n'
                     '[mesh]\nfile = "m.msh"\nsections = { plate = "skin" }\n'
                     '[sections.skin]\nlayers = [{ material = "steel", thickness = 1e-3 }]\n'
-                    '[boundary]\nsupports = { clamp = "clamped" }\n' + extra)
+                    + ('[boundary]\nsupports = { clamp = "clamped" }\n' if clamped else "")
+                    + extra)
     return path
 
 
@@ -184,3 +185,15 @@ def test_modes_too_fine_for_the_mesh_are_named_and_are_the_inaccurate_ones(tmp_p
     err = np.abs(coarse / fine - 1)
     assert named == [int(k) + 1 for k in np.flatnonzero(err > 0.04)], (named, err)
     assert named == [29, 30]
+
+
+def test_rigid_labels_of_a_cracked_free_plate_do_not_depend_on_n(tmp_path):
+    """Two free pieces: 12 zero-energy modes, each labelled rigid at -n 6 as at -n 14."""
+    a, qa = _grid(0.0, 0.15, 6, 4, 0.2, 0)
+    b, qb = _grid(0.15, 0.3, 6, 4, 0.2, len(a))
+    model, _ = _build(_mesh_structure(tmp_path, a + b, np.vstack([qa, qb]), clamped=False))
+    six = modal_analysis(model, 6)
+    fourteen = modal_analysis(model, 14)
+    assert list(six.mode_type) == ["rigid"] * 6
+    assert list(fourteen.mode_type[:12]) == ["rigid"] * 12
+    assert "rigid" not in fourteen.mode_type[12:] and fourteen.fn_hz[12] > 1.0
