@@ -39,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from .._atomic import atomic_path, write_text
 from ..errors import FormatError, MissingDependencyError, ParameterError
 from ._beam import BeamSection
 from ._general import BeamSet, ShellSet, assemble_model
@@ -362,7 +363,8 @@ def write_vtu(model: FEModel, path: str | Path, result=None,
     Path
     """
     path = Path(path)
-    _export_mesh(model, result, fields).write(path, file_format="vtu")
+    with atomic_path(path) as tmp:
+        _export_mesh(model, result, fields).write(tmp, file_format="vtu")
     return path
 
 
@@ -391,7 +393,7 @@ def write_xdmf(model: FEModel, path: str | Path, result=None,
     if result is not None:
         fn = np.asarray(result.fn_hz, dtype=float)
         rows = "".join(f"{k},{float(f)!r}\n" for k, f in enumerate(fn, start=1))
-        path.with_suffix(".fn_hz.csv").write_text("mode,fn_hz\n" + rows)
+        write_text(path.with_suffix(".fn_hz.csv"), "mode,fn_hz\n" + rows)
     return path
 
 
@@ -405,9 +407,12 @@ def write_uff(model: FEModel, path: str | Path, result=None) -> Path:
     import pyuff
 
     path = Path(path)
-    if path.exists():
-        path.unlink()
-    uff = pyuff.UFF(str(path))
+    with atomic_path(path) as tmp:
+        _write_uff_sets(pyuff, pyuff.UFF(str(tmp)), model, result)
+    return path
+
+
+def _write_uff_sets(pyuff, uff, model: FEModel, result) -> None:
     ids = np.asarray(model.node_ids, dtype=int)
     zeros = np.zeros(model.n_nodes, dtype=int)
     uff.write_sets(pyuff.prepare_2411(node_nums=ids, def_cs=zeros, disp_cs=zeros,
@@ -428,4 +433,3 @@ def write_uff(model: FEModel, path: str | Path, result=None) -> Path:
                 freq=float(result.fn_hz[k - 1]), modal_damp_vis=0.0, modal_damp_his=0.0,
                 return_full_dict=True)
             uff.write_sets(ds, mode="add")
-    return path

@@ -573,10 +573,17 @@ def modal_analysis(
                      (2 * np.pi * 1e-3) ** 2)
         rigid = np.abs(w2) < thresh
         low = np.abs(w2[~rigid])
+        bound = _trial_scale_bound(model) if low.size else np.inf
+        if np.isfinite(bound) and bound > 0:
+            # zero-energy modes by a scale that does not depend on how many modes were
+            # asked for (the largest computed eigenvalue does): the pieces of a cracked
+            # mesh move rigidly whether -n is 6 or 8
+            rigid |= np.abs(w2) < 1e-7 * bound
+            low = np.abs(w2[~rigid])
         # the candidates below need |omega2| < 1e-5 q; the minimum over four of the
         # trial fields bounds q from above, and when no mode is below 1e-5 of that
         # bound, none is a candidate and q is not needed (clamped structures)
-        if low.size and (memo or low.min() < 1e-5 * _trial_scale_bound(model)):
+        if low.size and (memo or low.min() < 1e-5 * bound):
             trial_q = trial()
         else:
             trial_q = np.inf
@@ -604,6 +611,9 @@ def modal_analysis(
             labels.append(by_energy[i])
         else:
             labels.append(mode_type(model, vecs[:, i]))
+    from ._sanity import warn_under_resolved
+
+    warn_under_resolved(model, vecs, fn, rigid)
     return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
                        dof_node_id=np.asarray(model.node_ids)[model.dof_node],
                        dof_component=np.asarray(model.dof_component))

@@ -158,6 +158,11 @@ def load_structure(path: str | Path) -> dict:
         If the file is missing or not valid TOML (message names the file).
     """
     path = Path(path)
+    from .._atomic import special_file
+
+    kind = special_file(path)
+    if kind is not None:
+        raise ConfigError(f"structure file {str(path)!r} is {kind}, expected a TOML file")
     try:
         with path.open("rb") as fh:
             return resolve_mesh_file(tomllib.load(fh), path.parent)
@@ -326,6 +331,20 @@ def _plies(layers: Any, materials: Mapping, where: str) -> list[Ply]:
 
 
 def build_model(structure: Mapping | str | Path) -> FEModel:
+    """Build an :class:`FEModel` from a structure description, checked before any solve.
+
+    The model passes :func:`mvtk.fe._sanity.check_model`: duplicate names, duplicated
+    elements, points off the mesh and complex or indefinite matrices are errors; a
+    geometry or material in a suspicious unit, a mesh too coarse for a bending
+    half-wave and coincident unconnected nodes are :class:`~mvtk.errors.ModelWarning`
+    s, also listed in ``model.meta["sanity"]``.
+    """
+    from ._sanity import check_model
+
+    return check_model(_build_model(structure))
+
+
+def _build_model(structure: Mapping | str | Path) -> FEModel:
     """Build an :class:`FEModel` from a structure description.
 
     Parameters
@@ -675,6 +694,10 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         mesh = read_mesh(path)
     except MvtkError as err:
         raise ConfigError(f"mesh.file: {err}") from err
+    from ._sanity import check_size
+
+    check_size(len(mesh.nodes), sum(len(c) for c in mesh.cells.values()),
+               f"mesh.file {path.name}")
     piezo_patches: list = []
     if "patches" in s:
         mesh, mapping, sections, piezo_patches = _mesh_patches(s, mesh, dict(mapping),
@@ -854,6 +877,9 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if isinstance(n_el, bool) or not isinstance(n_el, int) or n_el < 1:
         raise ConfigError(f"mesh.{given[0] if given else 'n_elements'}: expected a positive "
                           f"integer, got {n_el!r}")
+    from ._sanity import check_size
+
+    check_size(n_el + 1, n_el, f"mesh.{given[0] if given else 'n_elements'}", beam=True)
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")

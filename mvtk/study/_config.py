@@ -46,6 +46,7 @@ import copy
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ..errors import ConfigError
 from ._schema import CONTROLLER_SCHEMAS, SCHEMA, STRUCTURE_TABLES, validate
@@ -111,10 +112,30 @@ class Study:
 
     @property
     def input_files(self) -> list[Path]:
+        """Every file the study reads: the study, the structure, the mesh files the
+        structure names (``file`` keys), the measurements and the modal files."""
         files = [self.path]
         if self.structure_file is not None:
             files.append(self.structure_file)
+        files += _named_files(self.structure, self.structure_file or self.path)
         return files + list(self.measurement_files.values()) + list(self.extra_files.values())
+
+
+def _named_files(desc: Any, base: Path) -> list[Path]:
+    """Existing files named by a ``file`` key anywhere in a structure description."""
+    out: list[Path] = []
+    if isinstance(desc, Mapping):
+        for key, val in desc.items():
+            if key == "file" and isinstance(val, str):
+                p = Path(val) if Path(val).is_absolute() else base.parent / val
+                if p.is_file():
+                    out.append(p)
+            else:
+                out += _named_files(val, base)
+    elif isinstance(desc, list | tuple):
+        for val in desc:
+            out += _named_files(val, base)
+    return out
 
 
 def load_study(path: str | Path) -> Study:

@@ -23,6 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import write_text
 from ..errors import ConfigError, MvtkError
 
 __all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE", "mesh_structure_toml"]
@@ -265,10 +266,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         if not is_toml:
             text = mesh_structure_toml(s_path, folder)
             s_path = folder / "structure.toml"
-            s_path.write_text(text, encoding="utf-8")
+            write_text(s_path, text)
     else:
         s_path = folder / "structure.toml"
-        s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
+        write_text(s_path, STRUCTURE_TEMPLATE)
 
     tests = [_classify(Path(m), read_options) for m in measurements]
 
@@ -389,7 +390,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             *opts_line(*roving),
             "",
         ]
-    study_path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(study_path, "\n".join(lines))
     try:
         load_study(study_path)
     except ConfigError as err:
