@@ -38,18 +38,26 @@ def study_checks(res: StudyResult) -> list[Check]:
     tol = res.study.config["checks"]
     src = _ref(res, "source", "references")
     checks: list[Check] = []
-    targets = res.study.config.get("updating", {}).get("targets_hz") or _ref(
-        res, "experiment_fn_hz", [])
+    targets = _target_frequencies(res)
     dmp = res.results.get("damping", {})
     hp = dmp.get("half_power")
     if hp and targets:
+        # each identified mode is checked against the target of the same mode (paired by
+        # frequency from the modes the damping stage was asked for), never by position
+        guess = list(dmp.get("fn_guess_hz", [])) + list(dmp.get("broadband_fn_guess_hz", []))
+        if len(guess) != len(hp["fn_hz"]):
+            guess = list(hp["fn_hz"])
+        to_target = _pair(guess, targets)
+        zref = _ref(res, "zeta", [])
+        to_zref = _pair(guess, _ref(res, "experiment_fn_hz", [])[: len(zref)]) if zref else {}
         for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
-            if i < len(targets):
-                checks.append(Check(f"identified f{i + 1} (half-power peak)", fn, targets[i],
-                                    tol["identified_fn_rel"], "Hz", source="study targets"))
-            zref = _ref(res, "zeta", [])
-            if i < len(zref):
-                checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[i],
+            if i in to_target:
+                checks.append(Check(f"identified f{i + 1} (half-power peak)", fn,
+                                    targets[to_target[i]], tol["identified_fn_rel"], "Hz",
+                                    source="study targets"))
+            j = to_zref.get(i, i if not _ref(res, "experiment_fn_hz") else None)
+            if j is not None and j < len(zref):
+                checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[j],
                                     tol["identified_zeta_rel"], "", source=src))
     truth_pair = _truth_rayleigh(res)
     if hp and truth_pair:
@@ -73,7 +81,15 @@ def study_checks(res: StudyResult) -> list[Check]:
         checks.append(Check("Rayleigh beta (half-power)", rh["beta"],
                             _ref(res, "half_power_beta"), tol["rayleigh_rel"], "s", source=src))
     checks += _correlation_checks(res, tol)
+    checks += _consistency_checks(res, tol)
     up = res.results.get("updating")
+    if up and "identifiable_study" in up:
+        checks.append(Check(
+            "updated parameters identifiable from the targets"
+            + (f" (not: {up['not_identifiable_why']}; the data determine "
+               f"{up['identifiable_combination']})" if not up["identifiable_study"] else ""),
+            1.0 if up["identifiable_study"] else 0.0, 1.0, 0.0, "", kind="lower",
+            source="log-sensitivity condition number and bounds"))
     if up:
         for i, (f, ft) in enumerate(zip(up["fn_hz"], up["targets_hz"])):
             checks.append(Check(f"updated FE f{i + 1}", f, ft, tol["updated_fn_rel"], "Hz",
@@ -142,6 +158,82 @@ def study_checks(res: StudyResult) -> list[Check]:
                                     tol["closed_loop_zeta_min"], 0.0, "", kind="lower",
                                     source="study tolerance"))
     return checks
+
+
+def _target_frequencies(res: StudyResult) -> list[float]:
+    """The updating targets (Hz) in either form, else the reference experiment."""
+    up = res.study.config.get("updating") or {}
+    if up.get("targets_hz"):
+        return [float(f) for f in up["targets_hz"]]
+    if up.get("targets"):
+        return [float(t["fn_hz"]) for t in up["targets"]]
+    return [float(f) for f in _ref(res, "experiment_fn_hz", []) or []]
+
+
+def _pair(a_hz, b_hz, max_rel: float = 0.1) -> dict[int, int]:
+    """One-to-one pairs ``i -> j`` of two frequency lists by frequency (within max_rel)."""
+    from ..updating import pair_by_frequency
+
+    if not len(a_hz) or not len(b_hz):
+        return {}
+    got = pair_by_frequency(a_hz, b_hz, max_rel=max_rel)
+    return {i: int(j) for i, j in enumerate(got) if j >= 0}
+
+
+def _consistency_checks(res: StudyResult, tol: dict) -> list[Check]:
+    """The same quantity from two sections: damping (half-power vs multi-point
+    identification), and the quality (MPC, MPD) of the multi-point shapes the study uses.
+
+    A multi-point damping ratio is compared only where the test's line spacing resolves
+    it (at least 5 lines across its half-power band 2 zeta f, the half-power estimator's
+    ``min_lines``); where it does not, the leakage of the short records can only widen
+    the peak, so the check is that it is not *below* the half-power value (an upper bound
+    of the damping), and its name says so.
+    """
+    out: list[Check] = []
+    mod = res.results.get("modal")
+    hp = res.results.get("damping", {}).get("half_power")
+    if mod and hp:
+        t = mod["table"]
+        lines = _modal_df_hz(res)
+        pairs = _pair(hp["fn_hz"], t["fn_hz"], max_rel=0.02)
+        for i, j in pairs.items():
+            z_hp, z_m, f = hp["zeta"][i], t["zeta"][j], t["fn_hz"][j]
+            n_lines = 2 * z_m * f / lines if lines else float("nan")
+            label = (f"zeta of mode {i + 1} ({f:.1f} Hz): multi-point test vs half-power")
+            if np.isfinite(n_lines) and n_lines < 5:
+                out.append(Check(label + f" (multi-point band {n_lines:.1f} lines of "
+                                 f"{lines:g} Hz: leakage-limited, an upper bound)",
+                                 z_m, z_hp, 0.0, "", kind="lower",
+                                 source="consistency between sections"))
+            else:
+                out.append(Check(label, z_m, z_hp, tol["zeta_consistency_rel"], "",
+                                 source="consistency between sections"))
+    up = res.results.get("updating")
+    if mod and up:
+        used = {int(k) for k in up.get("target_test_modes") or [] if k is not None}
+        t = mod["table"]
+        for m, mpc, mpd in zip(t["mode"], t["mpc"], t["mpd"]):
+            if int(m) in used:
+                out.append(Check(f"MPC of test mode {int(m)} (shape used to pair a target)",
+                                 float(mpc), float(tol["mpc_min"]), 0.0, "", kind="lower",
+                                 source="normal-mode shape"))
+                out.append(Check(f"MPD of test mode {int(m)} (shape used to pair a target)",
+                                 float(mpd), float(tol["mpd_max_deg"]), 0.0, "deg",
+                                 kind="upper", source="normal-mode shape"))
+    return out
+
+
+def _modal_df_hz(res: StudyResult) -> float:
+    """Line spacing (Hz) of the multi-point FRFs (0 when unknown)."""
+    mod = res.results.get("modal") or {}
+    if mod.get("df_hz"):
+        return float(mod["df_hz"])
+    arr = res.arrays.get("modal")
+    if arr is not None and "frequency" in arr.coords and arr.sizes.get("frequency", 0) > 1:
+        f = arr["frequency"].values
+        return float(f[1] - f[0])
+    return 0.0
 
 
 def _correlation_checks(res: StudyResult, tol: dict) -> list[Check]:
@@ -346,7 +438,7 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         if updated is not None and len(updated) == len(order):
             updated = [updated[i] for i in order]
         cols["experiment"] = targets
-    cols["FE nominal"] = fe["fn_hz"][: len(targets) if targets else None]
+    cols["FE nominal"] = _nominal_by_pairing(fe, up, targets)
     if up:
         cols["FE updated"] = updated
     if _ref(res, "fe_fn_hz"):
@@ -393,6 +485,28 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.figure(partial(plot_mode_shapes, arr["nodes"].values, arr["uz"].values[:, :k],
                                     fe["fn_hz"][:k]),
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
+
+
+def _nominal_by_pairing(fe: dict, up: dict | None, targets) -> list:
+    """Nominal FE frequency of the mode paired with each target (in target order).
+
+    The pairing is the updating's (by MAC, or by frequency on the nominal model); its
+    mode numbers count elastic modes, so rigid-body modes of the nominal table are
+    skipped. Without an updating the targets are paired by frequency. NaN where the
+    paired mode is beyond the modes the FE stage tabulated.
+    """
+    f = np.asarray(fe["fn_hz"], dtype=float)
+    if not targets:
+        return list(f)
+    if up and up.get("modes") is not None and len(up["modes"]) == len(targets):
+        t_up = np.asarray(up["targets_hz"], dtype=float)
+        order = np.argsort(t_up, kind="stable")
+        elastic = f[f >= 0.01 * float(np.min(t_up))]
+        modes = [int(up["modes"][i]) for i in order]
+        return [float(elastic[m - 1]) if 0 < m <= elastic.size else float("nan")
+                for m in modes]
+    pairs = _pair(list(targets), list(f), max_rel=1.0)
+    return [float(f[pairs[i]]) if i in pairs else float("nan") for i in range(len(targets))]
 
 
 def _mc_paths(u: dict) -> str:

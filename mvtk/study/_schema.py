@@ -157,9 +157,11 @@ _IMPACT = Table(
                  "study file.", REQUIRED),
      "reference": Key("str", "Force channel name.", REQUIRED),
      "response": Key("str", "Response channel name.", REQUIRED),
-     "record_s": _pos("Length of one record (one hit).", units="s"),
-     "force_window_s": _pos("Force window length after the hit (None: no window).",
-                            None, "s"),
+     "record_s": _pos("Length of one record (one hit); None: chosen from the data "
+                      "(the time between hits, zero-padded when the response has decayed), "
+                      "as `mvtk damping` does.", None, units="s"),
+     "force_window_s": _pos("Force window length after the hit (None: 4 x the measured "
+                            "pulse width, as `mvtk damping` does).", None, "s"),
      "read_options": _read_options()},
 )
 
@@ -257,6 +259,12 @@ _CHECK_DOC = {
     "closed_loop_zeta_min": ("minimum closed-loop damping ratio of mode 1 of every linear "
                              "controller", 0.005, ""),
     "truth_param_rel": ("updated parameters vs the SYNTHETIC truth", 0.05, ""),
+    "zeta_consistency_rel": ("damping of one mode from two methods (half-power vs the "
+                             "multi-point identification) where both resolve it", 0.30, ""),
+    "mpc_min": ("minimum modal phase collinearity of each multi-point mode whose shape "
+                "the study uses", 0.9, ""),
+    "mpd_max_deg": ("maximum mean phase deviation of each multi-point mode whose shape the "
+                    "study uses", 15.0, "deg"),
     "uncertainty_cov_rel": ("Monte-Carlo CoV(f1) vs its first-order estimate", 0.20, ""),
     "mac_min": ("minimum MAC of each multi-point test mode with its paired updated-FE mode",
                 0.9, ""),
@@ -322,8 +330,9 @@ SCHEMA: dict[str, Table] = {
         "fn_hz": _freqs("Approximate resonances searched in the impact test, ascending."),
         "broadband_fn_hz": _freqs("Resonances searched in the broadband test, ascending "
                                   "and above fn_hz.", []),
-        "half_power_method": Key("str", "Half-power estimator (mvtk.damping.half_power).",
-                                 "interpolate", choices=("interpolate", "fit")),
+        "half_power_method": Key("str", "Half-power variant (mvtk.damping.half_power; "
+                                 "the default is that of `mvtk damping`).",
+                                 "fit", choices=("fit", "interpolate")),
         "chowdhury_target_mass": Key("number", "Effective-mass fraction of the upper "
                                      "Chowdhury anchor.", 0.95, minimum=0.0, maximum=1.0,
                                      exclusive_minimum=True),
@@ -335,7 +344,14 @@ SCHEMA: dict[str, Table] = {
     }),
     "updating": Table(
         "Sensitivity-based updating (mvtk.updating.update): give targets_hz or targets.",
-        {"targets_hz": _freqs("Measured natural frequencies, ascending (mode order).", None),
+        {"targets_hz": _freqs("Measured natural frequencies, ascending. Each is paired "
+                              "one-to-one with the nominal FE mode nearest in frequency "
+                              "(or by MAC with a multi-point test), not by order; "
+                              "[[updating.targets]] with 'mode' fixes the pairing.", None),
+         "identifiability_cond_max": _pos(
+             "Largest condition number of the log-sensitivities d ln f / d ln p for which "
+             "the update is reported identifiable (a 1 % frequency error then moves the "
+             "weakest parameter combination by at most about this many %).", 100.0),
          "targets": Key("tables", "Targets as tables (fn_hz, weight, mode, label, shape, "
                         "kind).", None, table=_TARGET, min_length=1),
          "parameters": Key("tables", "Parameters to update ([[updating.parameters]]).",

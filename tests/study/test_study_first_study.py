@@ -1,0 +1,193 @@
+"""A first study from the user's own files: init -> run with no hand edit, paired right.
+
+The own structure: a cantilever aluminium plate (300 x 200 x 2 mm, clamped at x = 0,
+not the smart beam). The specimen differs from it (E = 74.2 GPa instead of 70 GPa); its
+hammer test is simulated from the specimen's own FE modes at the tip centre (driving
+point), where the torsion modes have a nodal line: the sensor misses FE modes 2 and 4,
+as a real accelerometer on a nodal line does. Pairing the measured peaks with the FE
+modes by order would compare 123 Hz with the 63 Hz torsion mode; the truth is known
+(the specimen's E and its mode numbers), so the pairing, the updated E and the verdicts
+are checked against it.
+"""
+
+from __future__ import annotations
+
+import copy
+import json
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mvtk.errors import ConfigError
+
+ROOT = Path(__file__).resolve().parents[2]
+E_TRUE = 74.2e9
+PLATE = {"name": "aluminium plate", "materials": {"al": {"E": 70e9, "nu": 0.33, "rho": 2700}},
+         "structure": {"type": "plate", "length": 0.3, "width": 0.2,
+                       "layers": [{"material": "al", "thickness": 2e-3}]},
+         "mesh": {"element_size": 0.025}, "boundary": {"clamp": "x0"}}
+
+
+def _write_structure(path: Path, desc: dict) -> None:
+    import tomli_w
+
+    path.write_text(tomli_w.dumps(desc), encoding="utf-8")
+
+
+def _specimen_hammer_test(path: Path) -> tuple[np.ndarray, tuple]:
+    """Three hits at the tip centre of the specimen, accelerance, zeta 1 %, 0.1 % noise."""
+    from mvtk.fe import DOF_NAMES, build_model, modal_analysis
+    from mvtk.testing import impact_test
+
+    truth = copy.deepcopy(PLATE)
+    truth["materials"]["al"]["E"] = E_TRUE
+    model = build_model(truth)
+    modes = modal_analysis(model, 8)
+    uz = model.expand(modes.shapes)[:, DOF_NAMES.index("uz"), :]
+    node = int(np.argmin(np.linalg.norm(model.nodes - [0.3, 0.1, 0.0], axis=1)))
+    phi = uz[node]
+    seen = (modes.fn_hz < 400) & (np.abs(phi) > 1e-6 * np.abs(phi).max())
+    th = impact_test(modes.fn_hz[seen], 0.01, 2048.0, 8.0, 3, np.random.default_rng(7),
+                     modal_constants=phi[seen] ** 2)
+    x = th.values.copy()
+    x[1] += 1e-3 * x[1].std() * np.random.default_rng(8).standard_normal(x.shape[1])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# hammer test at the tip centre of the plate\n"
+                 "# quantity: force, acceleration\n"
+                 "time [s],hammer [N],tip [m/s^2]\n")
+        np.savetxt(fh, np.column_stack([th["time"].values, x[0], x[1]]), fmt="%.10g",
+                   delimiter=",")
+    return modes.fn_hz[seen], tuple(int(k) + 1 for k in np.flatnonzero(seen))
+
+
+def test_pair_by_frequency_skips_a_missed_mode():
+    from mvtk.updating import FrequencyTarget, pair_by_frequency, pair_modes
+
+    model = [19.0, 63.2, 119.5, 216.5, 299.3]
+    assert list(pair_by_frequency([19.5, 123.1, 308.1], model)) == [0, 2, 4]
+    # by order the second target would take the 63 Hz mode
+    t = [FrequencyTarget(f) for f in (19.5, 123.1, 308.1)]
+    assert list(pair_modes(t, np.array(model)).modes) == [0, 1, 2]
+    assert list(pair_modes(t, np.array(model), rest="frequency").modes) == [0, 2, 4]
+    # mode types are respected; a target beyond max_rel stays unpaired
+    kinds = ["bending", "torsion", "bending", "torsion", "bending"]
+    got = pair_by_frequency([70.0, 200.0], model, target_kinds=["bending", None],
+                            model_kinds=kinds)
+    assert list(got) == [2, 3]          # 70 Hz bending: 119.5, not the 63.2 Hz torsion
+    assert list(pair_by_frequency([1000.0], model, max_rel=0.1)) == [-1]
+
+
+def test_init_name_is_written_through_the_toml_writer(tmp_path):
+    from mvtk.study._init import init_study
+
+    name = 'a"b = 1\nsynthetic = true'
+    res = init_study(tmp_path / "s", name=name)
+    cfg = tomllib.loads(res.study.read_text(encoding="utf-8"))
+    assert cfg["study"] == {"name": name}
+    out = subprocess.run([sys.executable, "-m", "mvtk", "init", str(tmp_path / "t"),
+                          "--name", 'a"b = 1'], capture_output=True, text=True,
+                         cwd=ROOT, check=False)
+    assert out.returncode == 0, out.stderr
+    cfg = tomllib.loads((tmp_path / "t" / "study.toml").read_text(encoding="utf-8"))
+    assert cfg["study"] == {"name": 'a"b = 1'}
+
+
+def test_run_refuses_the_placeholder_structure(tmp_path):
+    from mvtk.study import run
+    from mvtk.study._init import PLACEHOLDER_MARK, init_study
+
+    res = init_study(tmp_path / "s")
+    with pytest.raises(ConfigError, match="placeholder structure"):
+        run(res.study, tmp_path / "out")
+    s = res.structure.read_text(encoding="utf-8")
+    res.structure.write_text("\n".join(x for x in s.splitlines() if PLACEHOLDER_MARK not in x),
+                             encoding="utf-8")
+    from mvtk.study._init import placeholder_structure
+
+    assert not placeholder_structure(res.structure)
+
+
+def test_e_and_thickness_from_frequencies_is_not_identifiable():
+    """f ~ t sqrt(E / rho) for a plate: only E^0.5 t is determined by frequencies."""
+    import warnings
+
+    from mvtk.fe import build_model, modal_analysis
+    from mvtk.study._stages import identifiability
+    from mvtk.updating import FrequencyTarget, Parameter, update
+
+    truth = copy.deepcopy(PLATE)
+    truth["materials"]["al"]["E"] = E_TRUE
+    f = modal_analysis(build_model(truth), 5).fn_hz
+    targets = [FrequencyTarget(float(x)) for x in f]
+    e = Parameter("materials.al.E", lower=35e9, upper=140e9)
+    t = Parameter("structure.layers.0.thickness", lower=1e-3, upper=4e-3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        both = update(PLATE, [e, t], targets)
+        one = update(PLATE, [e], targets)
+    v = identifiability(both, [e.path, t.path], 100.0)
+    assert v["identifiable_study"] is False
+    assert "condition number" in v["not_identifiable_why"]
+    # the combination the frequencies determine: E^0.5 * t (exponents normalised)
+    assert v["identifiable_combination"] == ("materials.al.E^0.50 * "
+                                             "structure.layers.0.thickness^1.00")
+    w = identifiability(one, [e.path], 100.0)
+    assert w["identifiable_study"] is True and w["not_identifiable_why"] == ""
+    assert one.values[0] == pytest.approx(E_TRUE, rel=1e-4)
+
+
+def test_first_study_from_init_to_run_without_edits(tmp_path):
+    """init -> run: targets paired with the right FE modes, E within 0.5 % of the truth,
+    the study's damping table equal to `mvtk damping` on the same file."""
+    from mvtk.study import run
+    from mvtk.study._init import init_study
+
+    structure = tmp_path / "plate.toml"
+    _write_structure(structure, PLATE)
+    test = tmp_path / "hammer.csv"
+    f_true, seen_modes = _specimen_hammer_test(test)
+    assert seen_modes == (1, 3, 5, 6)           # the sensor misses torsion modes 2 and 4
+    res = init_study(tmp_path / "study", structure=structure, measurements=[test])
+    cfg = tomllib.loads(res.study.read_text(encoding="utf-8"))
+    targets = cfg["updating"]["targets"]
+    # the reliable peaks (modes 5 and 6, 58 Hz apart, may overlap) with their true mode
+    truth = [seen_modes[int(np.argmin(np.abs(f_true - t["fn_hz"])))] for t in targets]
+    assert len(targets) >= 3 and truth[:3] == [1, 3, 5]
+    assert [t["mode"] for t in targets] == truth
+    assert "targets_hz" not in cfg["updating"]
+    assert "record_s" not in cfg["measurements"]["impact"]
+    assert len(cfg["damping"]["fn_hz"]) == len(targets)
+
+    out = run(res.study, tmp_path / "report", progress=False, parallel=False)
+    assert not out.failed, out.failed
+    up = out.results["updating"]
+    assert list(up["modes"]) == truth
+    assert up["values"][0] == pytest.approx(E_TRUE, rel=5e-3)
+    assert up["identifiable_study"] is True
+    from mvtk.study._report import study_checks
+
+    checks = {c.name: c for c in study_checks(out)}
+    assert checks["updated parameters identifiable from the targets"].passed
+    n = len(targets)
+    assert all(checks[f"updated FE f{i}"].passed for i in range(1, n + 1))
+    assert all(checks[f"identified f{i} (half-power peak)"].passed for i in range(1, n + 1))
+
+    # one estimator: `mvtk damping` with the settings the study states gives its table
+    d = out.results["damping"]
+    opts = d["half_power_settings"]["impact"]["command_options"].split()
+    cli = subprocess.run([sys.executable, "-m", "mvtk", "damping", str(test), *opts,
+                          "--json"], capture_output=True, text=True, cwd=ROOT, check=False)
+    assert cli.returncode == 0, cli.stderr
+    rows = json.loads(cli.stdout)
+    hp = d["half_power"]
+    for key in ("fn_hz", "zeta", "f1_hz", "f2_hz"):
+        assert [r[key] for r in rows] == pytest.approx(hp[key], rel=1e-9, abs=0)
+    # and the defaults are the same: without --fn the command finds the same modes
+    cli = subprocess.run([sys.executable, "-m", "mvtk", "damping", str(test), "--json"],
+                         capture_output=True, text=True, cwd=ROOT, check=False)
+    rows = [r for r in json.loads(cli.stdout) if r["reliable"]]
+    assert [r["zeta"] for r in rows] == pytest.approx(hp["zeta"], rel=1e-9, abs=0)
