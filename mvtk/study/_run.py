@@ -244,7 +244,10 @@ def run(
     study = study_path if isinstance(study_path, Study) else load_study(study_path)
     from ._init import PLACEHOLDER_MARK, placeholder_structure
 
-    if study.structure_file is not None and placeholder_structure(study.structure_file):
+    wanted = stages_for(study.config, STAGE_NEEDS if stages is None else stages)
+    needs_fe = stages is None or any(s not in ("ingest", "modal") for s in wanted)
+    if (needs_fe and study.structure_file is not None
+            and placeholder_structure(study.structure_file)):
         raise ConfigError(
             f"{study.structure_file}: this is the placeholder structure `mvtk init` wrote "
             f"(line {PLACEHOLDER_MARK!r}); edit it to your structure (geometry, materials, "
