@@ -36,6 +36,8 @@ def _init(args: argparse.Namespace) -> int:
         print("  targets paired with FE modes by frequency: " + ", ".join(
             f"{r['fn_hz']:.5g} Hz -> mode {r['fe_mode']} ({r['fe_fn_hz']:.5g} Hz)"
             for r in res.pairing))
+    for line in res.mesh_hint:
+        print(f"  {line}")
     print(f"next: {res.next_command}")
     return 0
 

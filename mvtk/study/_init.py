@@ -84,8 +84,13 @@ class InitResult:
     pairing : list of dict
         Each measured resonance (``fn_hz``) with the FE mode it was paired with by
         frequency (``fe_mode``, 1-based among the elastic modes, ``fe_fn_hz``,
-        ``df_pct``); empty when the structure was not solved (placeholder, mesh to edit,
-        or a multi-point test whose shapes pair the modes when the study runs).
+        ``df_pct``; with a generated mesh also ``fe_fn_refined_hz`` and
+        ``refined_change_pct`` on a mesh refined twice); empty when the structure was not
+        solved (placeholder, mesh to edit, or a multi-point test whose shapes pair the
+        modes when the study runs).
+    mesh_hint : list of str
+        A mesh-convergence hint (lines) when the refined mesh changes a paired FE mode by
+        more than the default ``checks.updated_fn_rel``; empty otherwise.
     """
 
     study: Path
@@ -93,6 +98,7 @@ class InitResult:
     tests: list = field(default_factory=list)
     next_command: str = ""
     pairing: list = field(default_factory=list)
+    mesh_hint: list = field(default_factory=list)
 
 
 def _rel(path: Path, start: Path) -> str:
@@ -247,9 +253,12 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         placeholder plate written to ``folder/structure.toml``.
     measurements : sequence of path
         Measurement files: the first impact test becomes ``[measurements.impact]`` (its
-        resonances ``[damping] fn_hz`` and ``[updating] targets_hz``), a free decay
-        ``[measurements.decay]``, a multi-point FRF set (UFF 58 with node numbers)
-        ``[modal]``. Files that fit none are listed in the result with the reason.
+        reliable resonances ``[damping] fn_hz`` and the ``[[updating.targets]]``, each
+        paired with an FE mode of ``structure`` by frequency), every other hammer test
+        ``[measurements.impact_2]``, ... (with its own reliable resonances), the free
+        decays ``[measurements.decay]``, ``[measurements.decay_2]``, ..., a multi-point
+        FRF set (UFF 58 with node numbers) ``[modal]``. Files that fit none are listed in
+        the result with the reason.
     name : str, optional
         Study name (default: the folder name).
     overwrite : bool
@@ -325,10 +334,13 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     for t in roving:
         t["kind"] = "impact" if t is impact else "roving set"
         t["roving"] = True
+    more_impacts = [t for t in tests if t["kind"] == "impact" and t is not impact
+                    and not t.get("roving")]
+    more_decays = [t for t in tests if t["kind"] == "decay" and t is not decay]
     for t in tests:
-        if t["kind"] != "skipped" and t is not impact and t is not decay and t is not modal \
-                and not t.get("roving"):
-            t.update(kind="skipped", why=f"a second {t['kind']} test: add it by hand")
+        if t["kind"] == "modal" and t is not modal:
+            t.update(kind="skipped", why="a second multi-point FRF set: a study identifies "
+                     "one [modal] test")
 
     lines = [
         f"# Validation study written by `mvtk init` from {len(tests)} measurement file(s).",
@@ -347,7 +359,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "n_modes = 6",
         "",
     ]
-    if impact or decay:
+    if impact or decay or more_impacts:
         lines.append("[measurements]")
         lines.append("")
     if impact:
@@ -361,17 +373,34 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             *opts_line(impact),
             "",
         ]
-    if decay:
+    for k, t in enumerate(more_impacts):
+        own = t.get("fn_hz") or []
         lines += [
-            "[measurements.decay]    # free decay (no force channel)",
-            f"file = {_toml(_rel(decay['file'], folder))}",
-            f"channel = {_toml(decay['channel'])}",
-            *opts_line(decay),
+            f"[measurements.impact_{k + 2}]   # another hammer test: its modes are a "
+            "consistency check",
+            'kind = "impact"',
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"reference = {_toml(t['reference'])}",
+            f"response = {_toml(t['response'])}",
+            (f"fn_hz = {_fmt_list(own)}   # its reliable resonances" if own else
+             "# fn_hz: none reliable in this file; the modes of [damping] fn_hz are searched"),
+            *opts_line(t),
+            "",
+        ]
+    for k, t in enumerate(([decay] if decay else []) + more_decays):
+        lines += [
+            ("[measurements.decay]    # free decay (no force channel)" if k == 0 else
+             f"[measurements.decay_{k + 1}]   # another free decay"),
+            *([] if k == 0 else ['kind = "decay"']),
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"channel = {_toml(t['channel'])}",
+            *opts_line(t),
             "",
         ]
     fn = (impact or {}).get("fn_hz") or []
     pairing: list[dict] = []
     pair_note = ""
+    mesh_hint: list[str] = []
     if impact and len(fn) >= 2:
         lines += [
             "[damping]",
@@ -385,12 +414,18 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
                   "stage needs two (run `mvtk damping` on the file to see why)", ""]
     if impact and fn:
         shaped = bool(modal or roving)
-        if is_toml and not shaped:
-            pairing, pair_note = _pair_with_model(s_path, fn)
+        if is_toml:
+            from ._config import CHECK_KEYS
+
+            rows, pair_note, mesh_hint = _pair_with_model(
+                s_path, fn, float(CHECK_KEYS["updated_fn_rel"]))
+            pairing = [] if shaped else rows
         material = _first_material(s_path)
         updating = ["[updating]", ""]
         if pair_note:
             updating.insert(1, f"# {pair_note}")
+        if mesh_hint:
+            updating[1:1] = [f"# {x}" for x in mesh_hint]
         if pairing:
             updating += ["# Each measured resonance paired one-to-one with the FE mode of the "
                          "structure nearest in", "# frequency (a mode the sensor missed "
@@ -442,6 +477,15 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     if roving:
         lo = max(max(t["band_hz"][0] for t in roving), 0.0)
         hi = 0.95 * min(t["band_hz"][1] for t in roving)
+        # the band from the data: around the reliable resonances any set showed (a
+        # mode on a nodal line of one hammer point is seen at another), inside the
+        # excited band
+        peaks = sorted({f for t in roving for f in (t.get("fn_hz") or [])})
+        band_note = "excited band of the sets (no reliable resonance found)"
+        if peaks:
+            lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
+            band_note = (f"0.7 x the lowest and 1.2 x the highest of the reliable "
+                         f"resonances of the sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
         sets = _toml([_rel(t["file"], folder) for t in roving])
         kind = ("roving hammer" if len({t["nodes"][0] for t in roving}) > 1
                 else "roving sensor")
@@ -449,8 +493,8 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"[modal]                 # {kind} test: {len(roving)} sets with node numbers "
             "(mvtk.modal)",
             f"sets = {sets}",
-            f"fmin_hz = {max(lo, 0.02 * hi):.6g}",
-            f"fmax_hz = {hi:.6g}   # EDIT: the band of your modes",
+            f"fmin_hz = {max(lo, 0.02 * hi):.6g}   # {band_note}",
+            f"fmax_hz = {hi:.6g}",
 *geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
                            "needed to correlate with the FE model"),
             *opts_line(*roving),
@@ -468,34 +512,86 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     out_dir = folder / "report"
     return InitResult(study_path, s_path, tests,
                       f"mvtk run {study_path.as_posix()} --out {out_dir.as_posix()}",
-                      pairing)
+                      pairing, mesh_hint)
 
 
-def _pair_with_model(structure: Path, fn_hz: list[float]) -> tuple[list[dict], str]:
+def _refined(desc: dict) -> dict | None:
+    """``desc`` with its generated mesh refined twice in each direction (None: an
+    imported mesh or deck, which ``mvtk init`` cannot refine)."""
+    import copy
+
+    st = desc.get("structure") or {}
+    mesh = desc.get("mesh") or {}
+    if st.get("type", "plate") not in ("plate", "beam") or "file" in mesh:
+        return None
+    out = copy.deepcopy(desc)
+    m = out.setdefault("mesh", {})
+    if "element_size" in m:
+        m["element_size"] = 0.5 * float(m["element_size"])
+    elif st.get("type") == "beam":
+        key = "n_elements" if "n_elements" in m else "nx" if "nx" in m else "n_elements"
+        m[key] = 2 * int(m.get(key, 40))
+    elif "nx" in m or "ny" in m:
+        for k in ("nx", "ny"):
+            if k in m:
+                m[k] = 2 * int(m[k])
+    else:
+        return None
+    return out
+
+
+def _pair_with_model(structure: Path, fn_hz: list[float], tol: float
+                     ) -> tuple[list[dict], str, list[str]]:
     """Pair measured resonances with the FE modes of ``structure`` by frequency.
 
-    Returns ``(rows, note)``: one row per paired resonance (``fn_hz``, ``fe_mode``
-    1-based among the elastic modes, ``fe_fn_hz``, ``df_pct``), or no rows and a note
-    saying why the model could not be solved (the pairing is then done when the study
-    runs).
+    Returns ``(rows, note, mesh_hint)``: one row per paired resonance (``fn_hz``,
+    ``fe_mode`` 1-based among the elastic modes, ``fe_fn_hz``, ``df_pct``, and
+    ``fe_fn_refined_hz``, ``refined_change_pct`` on a mesh refined twice), or no rows
+    and a note saying why the model could not be solved (the pairing is then done when
+    the study runs); ``mesh_hint`` holds the lines of a mesh-convergence hint when the
+    refined mesh changes a paired mode by more than ``tol`` (relative).
     """
     from ..fe import build_model, load_structure
     from ..updating import pair_by_frequency
     from ._stages import nominal_modes
 
     try:
-        model = build_model(load_structure(structure))
+        desc = load_structure(structure)
+        model = build_model(desc)
         modes = nominal_modes(model, 1.3 * max(fn_hz), n_min=len(fn_hz) + 4)
     except MvtkError as err:
         return [], (f"the structure could not be solved ({err}): the targets are paired by "
-                    "frequency when the study runs")
+                    "frequency when the study runs"), []
     f = np.asarray(modes.fn_hz, dtype=float)
     elastic = f[f >= 0.01 * min(fn_hz)]
     got = pair_by_frequency(fn_hz, elastic)
     rows = [{"fn_hz": float(fm), "fe_mode": int(m) + 1, "fe_fn_hz": float(elastic[m]),
              "df_pct": 100.0 * (elastic[m] / fm - 1.0)}
             for fm, m in zip(fn_hz, got) if m >= 0]
-    return rows, ""
+    hint: list[str] = []
+    fine = _refined(desc)
+    if fine is not None and rows and model.n_dof < 60000:
+        try:
+            fm_ = np.asarray(nominal_modes(build_model(fine), 1.3 * max(fn_hz),
+                                           n_min=len(elastic) + 2).fn_hz, dtype=float)
+        except MvtkError:
+            fm_ = np.zeros(0)
+        fe_fine = fm_[fm_ >= 0.01 * min(fn_hz)]
+        for r in rows:
+            k = r["fe_mode"] - 1
+            if k < fe_fine.size:
+                r["fe_fn_refined_hz"] = float(fe_fine[k])
+                r["refined_change_pct"] = 100.0 * (fe_fine[k] / r["fe_fn_hz"] - 1.0)
+        worst = [r for r in rows if abs(r.get("refined_change_pct", 0.0)) > 100 * tol]
+        if worst:
+            hint = [f"MESH: a mesh refined twice in each direction changes the paired FE "
+                    f"mode(s) by more than the target tolerance ({100 * tol:g} %):"]
+            hint += [f"  FE mode {r['fe_mode']}: {r['fe_fn_hz']:.6g} Hz -> "
+                     f"{r['fe_fn_refined_hz']:.6g} Hz ({r['refined_change_pct']:+.2g} %)"
+                     for r in worst]
+            hint.append("EDIT the structure's [mesh] (finer) before updating: otherwise the "
+                        "update compensates the discretisation error with the parameters")
+    return rows, "", hint
 
 
 def _first_material(structure: Path) -> tuple[str, float] | None:

@@ -44,12 +44,14 @@ def study_checks(res: StudyResult) -> list[Check]:
     if hp and targets:
         # each identified mode is checked against the target of the same mode (paired by
         # frequency from the modes the damping stage was asked for), never by position
-        guess = list(dmp.get("fn_guess_hz", [])) + list(dmp.get("broadband_fn_guess_hz", []))
-        if len(guess) != len(hp["fn_hz"]):
-            guess = list(hp["fn_hz"])
-        to_target = _pair(guess, targets)
+        groups = _rows_by_test(dmp, hp)
         zref = _ref(res, "zeta", [])
-        to_zref = _pair(guess, _ref(res, "experiment_fn_hz", [])[: len(zref)]) if zref else {}
+        ref_f = (_ref(res, "experiment_fn_hz", []) or [])[: len(zref)]
+        to_target, to_zref = {}, {}
+        for rows, guess in groups:   # one-to-one within each test
+            to_target.update({rows[i]: j for i, j in _pair(guess, targets).items()})
+            if zref:
+                to_zref.update({rows[i]: j for i, j in _pair(guess, ref_f).items()})
         for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
             if i in to_target:
                 checks.append(Check(f"identified f{i + 1} (half-power peak)", fn,
@@ -180,6 +182,56 @@ def _pair(a_hz, b_hz, max_rel: float = 0.1) -> dict[int, int]:
     return {i: int(j) for i, j in enumerate(got) if j >= 0}
 
 
+def _rows_by_test(dmp: dict, hp: dict) -> list[tuple[list[int], list[float]]]:
+    """(row indices, searched frequencies) of each impact test of the damping table."""
+    tests = list(hp.get("test", ["impact"] * len(hp["fn_hz"])))
+    by = dmp.get("fn_guess_by_test")
+    if not by:
+        by = {"impact": list(dmp.get("fn_guess_hz", [])),
+              "broadband": list(dmp.get("broadband_fn_guess_hz", []))}
+    out = []
+    for name in dict.fromkeys(tests):
+        rows = [i for i, t in enumerate(tests) if t == name]
+        guess = list(by.get(name) or [])
+        if len(guess) != len(rows):
+            guess = [hp["fn_hz"][i] for i in rows]
+        out.append((rows, guess))
+    return out
+
+
+def _repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
+    """The same mode measured twice: by two impact tests, or by a decay and a hammer
+    test. Each later estimate is compared with the first (``zeta_consistency_rel``)."""
+    d = res.results.get("damping", {})
+    hp = d.get("half_power")
+    out: list[Check] = []
+    if not hp:
+        return out
+    f = np.asarray(hp["fn_hz"], dtype=float)
+    tests = list(hp.get("test", ["impact"] * f.size))
+    for i in range(f.size):
+        if not np.isfinite(f[i]):
+            continue
+        prev = [j for j in range(i) if np.isfinite(f[j]) and abs(f[j] / f[i] - 1) <= 0.02]
+        if prev and tests[prev[0]] != tests[i]:
+            j = prev[0]
+            out.append(Check(f"zeta at {f[i]:.1f} Hz: test {tests[i]} vs test {tests[j]} "
+                             "(half-power)", hp["zeta"][i], hp["zeta"][j],
+                             tol["zeta_consistency_rel"], "", source="same mode, two tests"))
+    for name, dec in (d.get("decays") or {}).items():
+        env = dec.get("envelope") or {}
+        for fe, ze in zip(env.get("fn_hz", []), env.get("zeta", [])):
+            if not np.isfinite(fe) or not f.size:
+                continue
+            j = int(np.nanargmin(np.abs(f / fe - 1)))
+            if abs(f[j] / fe - 1) <= 0.02:
+                out.append(Check(f"zeta at {fe:.1f} Hz: decay {name} (envelope fit) vs "
+                                 f"test {tests[j]} (half-power)", ze, hp["zeta"][j],
+                                 tol["zeta_consistency_rel"], "",
+                                 source="same mode, two methods"))
+    return out
+
+
 def _consistency_checks(res: StudyResult, tol: dict) -> list[Check]:
     """The same quantity from two sections: damping (half-power vs multi-point
     identification), and the quality (MPC, MPD) of the multi-point shapes the study uses.
@@ -190,7 +242,7 @@ def _consistency_checks(res: StudyResult, tol: dict) -> list[Check]:
     the peak, so the check is that it is not *below* the half-power value (an upper bound
     of the damping), and its name says so.
     """
-    out: list[Check] = []
+    out: list[Check] = _repeat_checks(res, tol)
     mod = res.results.get("modal")
     hp = res.results.get("damping", {}).get("half_power")
     if mod and hp:
@@ -367,6 +419,17 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
             "mass fraction uz": pair["mass_fraction"],
             "cumulative": np.cumsum(pair["mass_fraction"])}),
             "chowdhury_pairing", "Identified modes paired with FE modes (effective mass)",
+            passed_column=None)
+    decays = d.get("decays") or {}
+    if len(decays) > 1:
+        sec.table(pd.DataFrame([
+            {"test": name, "channel": dec["channel"],
+             "fn_hz (envelope)": (dec["envelope"].get("fn_hz") or [np.nan])[0],
+             "zeta envelope fit": (dec["envelope"].get("zeta") or [np.nan])[0],
+             "zeta log decrement": (dec["log_decrement"].get("zeta") or [np.nan])[0],
+             "reliable": (dec["envelope"].get("reliable") or [None])[0]}
+            for name, dec in decays.items()]), "damping_decays",
+            "Free decays (envelope fit and logarithmic decrement of each)",
             passed_column=None)
     md = d.get("model_damping")
     if md:

@@ -162,6 +162,10 @@ _IMPACT = Table(
                       "as `mvtk damping` does.", None, units="s"),
      "force_window_s": _pos("Force window length after the hit (None: 4 x the measured "
                             "pulse width, as `mvtk damping` does).", None, "s"),
+     "kind": Key("str", "Kind of the test: needed for a measurement named other than "
+                 "impact/broadband/decay.", "impact", choices=("impact",)),
+     "fn_hz": _freqs("Approximate resonances searched in this record (None: damping.fn_hz; "
+                     "damping.broadband_fn_hz for 'broadband').", None),
      "read_options": _read_options()},
 )
 
@@ -172,6 +176,10 @@ _DECAY = Table(
      "band_hz": Key("numbers", "Band-pass [f_low, f_high] around mode 1 before the fits "
                     "(None: no filter).", None, "Hz", minimum=0.0, exclusive_minimum=True,
                     ascending=True, length=2),
+     "kind": Key("str", "Kind of the test: needed for a measurement named other than "
+                 "impact/broadband/decay.", "decay", choices=("decay",)),
+     "fn_hz": _pos("Approximate frequency of the decaying mode (None: the first of "
+                   "damping.fn_hz).", None, "Hz"),
      "read_options": _read_options()},
 )
 
@@ -283,7 +291,14 @@ SCHEMA: dict[str, Table] = {
         "'file', the structure tables (materials, structure, patches, mesh, boundary, "
         "points, name) written inline at the top level of the study file.",
         {"file": Key("path", "Structure TOML, relative to the study file.", None)}),
-    "measurements": Table("The measured tests (each optional).", {
+    "measurements": Table(
+        "The measured tests, any number, each a named table: [measurements.impact], "
+        "[measurements.broadband] and [measurements.decay] have their kind by name; any "
+        "other name, e.g. [measurements.hit_2] or [measurements.decay_tip], says kind = "
+        "\"impact\" or \"decay\" and takes the keys of that kind. Every impact test gives "
+        "a half-power estimate of the modes it searches (its fn_hz), every decay an "
+        "envelope and log-decrement estimate of its mode; the same mode from two tests is "
+        "a consistency check of the report.", {
         "impact": Key("table", "Long impact test (fine frequency resolution).", None,
                       table=_IMPACT),
         "broadband": Key("table", "Short broadband impact test for the higher modes "
@@ -597,6 +612,38 @@ def validate_table(d: Mapping, table: Table, where: str, source: str = "") -> di
     return out
 
 
+#: Kind of the measurements named by their kind.
+_MEASUREMENT_KIND = {"impact": "impact", "broadband": "impact", "decay": "decay"}
+
+
+def _validate_measurements(d: Any, source: str) -> dict:
+    """``[measurements]``: any number of named tests, each of kind impact or decay."""
+    loc = f"{source}: " if source else ""
+    if not isinstance(d, Mapping):
+        raise ConfigError(f"{loc}[measurements]: expected a table of named tests, got {d!r}")
+    out = {}
+    for name, m in d.items():
+        where = f"measurements.{name}"
+        if not isinstance(m, Mapping) and str(name) not in _MEASUREMENT_KIND:
+            raise unknown_key_error(name, "measurements", _MEASUREMENT_KIND, source)
+        if not isinstance(m, Mapping):
+            raise ConfigError(f"{loc}[{where}]: expected a table (file, ... of an impact "
+                              f"test or a decay), got {m!r}")
+        kind = m.get("kind", _MEASUREMENT_KIND.get(str(name)))
+        if "kind" not in m and str(name) not in _MEASUREMENT_KIND:
+            err = unknown_key_error(name, "measurements", _MEASUREMENT_KIND, source)
+            raise ConfigError(f"{err}; a measurement of another name says its kind "
+                              "(kind = \"impact\" or \"decay\")")
+        if kind not in ("impact", "decay"):
+            raise ConfigError(
+                f"{loc}[{where}]: expected kind = \"impact\" or \"decay\" (a measurement "
+                "named other than impact, broadband or decay says its kind), got "
+                f"{kind!r}")
+        table = SCHEMA["measurements"].keys["decay" if kind == "decay" else "impact"].table
+        out[name] = validate_table(m, table, where, source)
+    return out
+
+
 def validate(cfg: Mapping, source: str = "", inline_structure: bool = False,
              structure_tables=STRUCTURE_TABLES) -> dict:
     """Validate a parsed study TOML against :data:`SCHEMA`.
@@ -626,7 +673,9 @@ def validate(cfg: Mapping, source: str = "", inline_structure: bool = False,
             raise ConfigError(f"{loc}unknown sections [{name!r}]{_suggest(name, accepted)}; "
                               f"accepted sections: {sorted(accepted)}")
     for name, value in cfg.items():
-        if name in SCHEMA and not (inline_structure and name == "structure"):
+        if name == "measurements":
+            out[name] = _validate_measurements(value, source)
+        elif name in SCHEMA and not (inline_structure and name == "structure"):
             out[name] = validate_table(value, SCHEMA[name], name, source)
         else:
             out[name] = value

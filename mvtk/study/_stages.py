@@ -37,7 +37,7 @@ def ingest(study: Study):
         ds = mvtk.io.read(path, **dict(meas[test].get("read_options") or {}))
         th = ds["time_history"]
         wanted = ([meas[test]["reference"], meas[test]["response"]]
-                  if test in ("impact", "broadband") else [meas[test]["channel"]])
+                  if meas[test].get("kind") != "decay" else [meas[test]["channel"]])
         names = [str(c) for c in th["channel"].values]
         missing = [w for w in wanted if w not in names]
         if missing:
@@ -182,11 +182,26 @@ def _paired_mass_fractions(description: dict, fn_hz: np.ndarray, known_fn_hz=Non
             "fe_fn_hz_all": fe_fn.tolist()}
 
 
-def damping(study: Study, arrays, description: dict, known_fn_hz=None):
-    """Half-power on the impact FRFs, envelope fit on the free decay, Rayleigh fits.
+def _first_of_each_mode(fn_hz: np.ndarray, rel: float = 0.02) -> np.ndarray:
+    """True for each row whose frequency is not within ``rel`` of an earlier row's."""
+    keep = np.ones(fn_hz.size, dtype=bool)
+    for i in range(fn_hz.size):
+        prev = fn_hz[:i][keep[:i] & np.isfinite(fn_hz[:i])]
+        if np.isfinite(fn_hz[i]) and prev.size and np.min(np.abs(prev / fn_hz[i] - 1)) <= rel:
+            keep[i] = False
+    return keep
 
-    Modes ``damping.fn_hz`` come from the long impact test (fine frequency resolution),
-    modes ``damping.broadband_fn_hz`` from the short broadband test. Rayleigh pairs: the
+
+def damping(study: Study, arrays, description: dict, known_fn_hz=None):
+    """Half-power on the impact FRFs, envelope fit on the free decays, Rayleigh fits.
+
+    Every impact-kind measurement gives a half-power estimate (:func:`mvtk.damping.
+    estimate`, the estimator of ``mvtk damping``) of the modes it searches: its own
+    ``fn_hz``, else ``damping.fn_hz`` (``damping.broadband_fn_hz`` for the one named
+    ``broadband``); the one named ``impact`` comes first. Every decay-kind measurement
+    gives an envelope fit and a logarithmic decrement of its mode (``fn_hz``, else the
+    first of ``damping.fn_hz``); the first decay is the one of the paper's Table 3. The
+    Rayleigh fits use each mode once (its first estimate). Rayleigh pairs: the
     paper's two-mode fit of modes 1 and 2 ("half-power"), the least-squares fit over all
     identified modes, and the Chowdhury pair (anchors by the effective mass of the FE
     modes of ``description`` paired with the identified ones by frequency).
@@ -205,29 +220,51 @@ def damping(study: Study, arrays, description: dict, known_fn_hz=None):
     result: dict[str, Any] = {"fn_guess_hz": fn_guess, "broadband_fn_guess_hz": bb_guess}
     out = {}
     zeta_hp = fn_hp = None
-    if "impact" in meas:
-        fr, hp_d, warns, sett = _impact_half_power(arrays, "impact", meas["impact"],
-                                                   fn_guess, method)
-        hp_d["test"] = ["impact"] * len(fn_guess)
-        result["half_power_warnings"] = warns
-        result["half_power_settings"] = {"impact": sett}
-        if bb_guess and "broadband" in meas:
-            fr_bb, d_bb, warns, sett = _impact_half_power(arrays, "broadband",
-                                                          meas["broadband"], bb_guess, method)
-            result["half_power_settings"]["broadband"] = sett
-            for k in hp_d:
-                hp_d[k] = list(hp_d[k]) + (list(d_bb[k]) if k in d_bb
-                                           else ["broadband"] * len(bb_guess))
-            result["half_power_warnings"] += [f"broadband test: {w}" for w in warns]
-            H = fr_bb["frf"].isel(response=0, reference=0)
-            out["frequency_bb"] = fr_bb["frequency"].values
-            out["frf_abs_bb"] = (("frequency_bb",), np.abs(H.values))
+    # every impact-kind test, the one named "impact" first (the long record of the
+    # paper's Table 3), the others in the order of the file
+    # the test names (not the whole table: a path written otherwise must not change the
+    # cache key), in the order of the file
+    names = list(study.measurement_files)
+    impacts = sorted((n for n in names if meas[n]["kind"] == "impact"),
+                     key=lambda n: n != "impact")
+    runs = []
+    for name in impacts:
+        m = meas[name]
+        guess = m.get("fn_hz") or (bb_guess if name == "broadband" else fn_guess)
+        if guess:
+            runs.append((name, [float(f) for f in guess]))
+    if runs:
+        result["half_power_settings"] = {}
+        result["half_power_warnings"] = []
+        result["fn_guess_by_test"] = {n: g for n, g in runs}
+        hp_d = None
+        for k, (name, guess) in enumerate(runs):
+            fr_k, d_k, warns, sett = _impact_half_power(arrays, name, meas[name], guess,
+                                                        method)
+            result["half_power_settings"][name] = sett
+            d_k["test"] = [name] * len(guess)
+            if k == 0:
+                fr, hp_d = fr_k, d_k
+                result["half_power_warnings"] += warns
+                primary_guess = guess
+                continue
+            for key in hp_d:
+                hp_d[key] = list(hp_d[key]) + (list(d_k[key]) if key in d_k
+                                               else [float("nan")] * len(guess))
+            result["half_power_warnings"] += [f"{name} test: {w}" for w in warns]
+            if name == "broadband":
+                H = fr_k["frf"].isel(response=0, reference=0)
+                out["frequency_bb"] = fr_k["frequency"].values
+                out["frf_abs_bb"] = (("frequency_bb",), np.abs(H.values))
+        fn_guess = primary_guess
         hp_d["mode"] = list(range(len(hp_d["fn_hz"])))
         result["half_power"] = hp_d
         result["frf_attrs"] = {k: v for k, v in fr.attrs.items()
                                if isinstance(v, str | int | float)}
         fn_hp, zeta_hp = np.asarray(hp_d["fn_hz"], float), np.asarray(hp_d["zeta"], float)
-        ok = np.isfinite(fn_hp) & np.isfinite(zeta_hp)
+        # the Rayleigh fits take each mode once: the first test's estimate of it (the
+        # same mode from another test is a consistency check of the report)
+        ok = np.isfinite(fn_hp) & np.isfinite(zeta_hp) & _first_of_each_mode(fn_hp)
         H = fr["frf"].isel(response=0, reference=0)
         f = fr["frequency"].values
         band = (f >= 0.5 * min(fn_guess)) & (f <= 1.3 * max(fn_guess))
@@ -274,23 +311,40 @@ def damping(study: Study, arrays, description: dict, known_fn_hz=None):
                 "warnings": _warning_messages(caught)}
         except (ValueError, RuntimeError) as err:  # MvtkError subclasses these
             result["rayleigh_chowdhury"] = {"error": str(err)}
-    if "decay" in meas:
-        m = meas["decay"]
-        th = _time_history(arrays, "decay")
+    decays = [n for n in names if meas[n]["kind"] == "decay"]
+    result["decays"] = {}
+    for k, name in enumerate(decays):
+        m = meas[name]
+        th = _time_history(arrays, name)
         band = tuple(m["band_hz"]) if m.get("band_hz") else None
+        f0 = float(m["fn_hz"]) if m.get("fn_hz") is not None else fn_guess[0]
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            env = md.envelope_fit(th, fn_guess[0], channel=m["channel"], band_hz=band)
-            logd = md.log_decrement(th, fn_guess[0], channel=m["channel"], band_hz=band)
-        result["envelope"] = env.to_dataframe().to_dict(orient="list")
-        result["log_decrement"] = logd.to_dataframe().to_dict(orient="list")
-        result["decay_warnings"] = _warning_messages(caught)
+            env = md.envelope_fit(th, f0, channel=m["channel"], band_hz=band)
+            logd = md.log_decrement(th, f0, channel=m["channel"], band_hz=band)
+        one = {"envelope": env.to_dataframe().to_dict(orient="list"),
+               "log_decrement": logd.to_dataframe().to_dict(orient="list"),
+               "warnings": _warning_messages(caught), "fn_guess_hz": f0,
+               "channel": m["channel"],
+               "settings": {"method": "envelope", "variant": "hilbert", "fn_hz": f0,
+                            "band_hz": band,
+                            "command_options": f"--channel {m['channel']} --method envelope "
+                            f"--fn {f0:.17g}" + ("" if band is None else
+                                                 f" --band {band[0]:.17g} {band[1]:.17g}")}}
+        result["decays"][name] = one
+        if k:
+            continue
+        result["envelope"] = one["envelope"]
+        result["log_decrement"] = one["log_decrement"]
         x = th.sel(channel=m["channel"]).values
         t = th["time"].values
         step = max(1, len(t) // 6000)
         out["decay_t"] = (("decay_time",), t[::step])
         out["decay_x"] = (("decay_time",), x[::step])
         result["decay_units"] = str(th["units"].values[0]) if "units" in th.coords else ""
+    result["decay_warnings"] = [w if k == 0 else f"{name} test: {w}"
+                                for k, name in enumerate(decays)
+                                for w in result["decays"][name]["warnings"]]
     if zeta_hp is not None:
         model_damping = cfg.get("model_damping", "half_power")
         pair = result.get(f"rayleigh_{model_damping}", {})

@@ -14,8 +14,6 @@ from __future__ import annotations
 
 import copy
 import json
-import subprocess
-import sys
 import tomllib
 from pathlib import Path
 
@@ -38,8 +36,12 @@ def _write_structure(path: Path, desc: dict) -> None:
     path.write_text(tomli_w.dumps(desc), encoding="utf-8")
 
 
-def _specimen_hammer_test(path: Path) -> tuple[np.ndarray, tuple]:
-    """Three hits at the tip centre of the specimen, accelerance, zeta 1 %, 0.1 % noise."""
+ZETA = 0.01   # every mode of the specimen
+
+
+def _specimen_hammer_test(path: Path, sensor=(0.3, 0.1), seed=7) -> tuple[np.ndarray, tuple]:
+    """Three hits at the tip centre of the specimen, the accelerometer at ``sensor``
+    (x, y in m); accelerance, zeta 1 %, 0.1 % noise."""
     from mvtk.fe import DOF_NAMES, build_model, modal_analysis
     from mvtk.testing import impact_test
 
@@ -48,20 +50,37 @@ def _specimen_hammer_test(path: Path) -> tuple[np.ndarray, tuple]:
     model = build_model(truth)
     modes = modal_analysis(model, 8)
     uz = model.expand(modes.shapes)[:, DOF_NAMES.index("uz"), :]
-    node = int(np.argmin(np.linalg.norm(model.nodes - [0.3, 0.1, 0.0], axis=1)))
-    phi = uz[node]
-    seen = (modes.fn_hz < 400) & (np.abs(phi) > 1e-6 * np.abs(phi).max())
-    th = impact_test(modes.fn_hz[seen], 0.01, 2048.0, 8.0, 3, np.random.default_rng(7),
-                     modal_constants=phi[seen] ** 2)
+
+    def at(x, y):
+        return uz[int(np.argmin(np.linalg.norm(model.nodes - [x, y, 0.0], axis=1)))]
+
+    phi = at(0.3, 0.1) * at(*sensor)
+    seen = (modes.fn_hz < 400) & (np.abs(phi) > 1e-9 * np.abs(phi).max())
+    th = impact_test(modes.fn_hz[seen], ZETA, 2048.0, 8.0, 3, np.random.default_rng(seed),
+                     modal_constants=phi[seen])
     x = th.values.copy()
-    x[1] += 1e-3 * x[1].std() * np.random.default_rng(8).standard_normal(x.shape[1])
+    x[1] += 1e-3 * x[1].std() * np.random.default_rng(seed + 1).standard_normal(x.shape[1])
     with open(path, "w", encoding="utf-8") as fh:
         fh.write("# hammer test at the tip centre of the plate\n"
                  "# quantity: force, acceleration\n"
-                 "time [s],hammer [N],tip [m/s^2]\n")
+                 "time [s],hammer [N],accel [m/s^2]\n")
         np.savetxt(fh, np.column_stack([th["time"].values, x[0], x[1]]), fmt="%.10g",
                    delimiter=",")
     return modes.fn_hz[seen], tuple(int(k) + 1 for k in np.flatnonzero(seen))
+
+
+def _specimen_decay(path: Path, fn_hz: float, amplitude: float, seed: int) -> None:
+    """A free decay of mode 1 (zeta 1 %), 8 s at 2048 Hz, 0.5 % noise."""
+    from mvtk.testing import sdof_free_decay
+
+    d = sdof_free_decay(fn_hz, ZETA, 2048.0, 8.0, amplitude=amplitude,
+                        quantity="acceleration", units="m/s^2")
+    x = d.values[0] + 5e-3 * amplitude * np.random.default_rng(seed).standard_normal(
+        d.sizes["time"])
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# free decay after a release, mode 1\n# quantity: acceleration\n"
+                 "time [s],tip [m/s^2]\n")
+        np.savetxt(fh, np.column_stack([d["time"].values, x]), fmt="%.10g", delimiter=",")
 
 
 def test_pair_by_frequency_skips_a_missed_mode():
@@ -88,10 +107,9 @@ def test_init_name_is_written_through_the_toml_writer(tmp_path):
     res = init_study(tmp_path / "s", name=name)
     cfg = tomllib.loads(res.study.read_text(encoding="utf-8"))
     assert cfg["study"] == {"name": name}
-    out = subprocess.run([sys.executable, "-m", "mvtk", "init", str(tmp_path / "t"),
-                          "--name", 'a"b = 1'], capture_output=True, text=True,
-                         cwd=ROOT, check=False)
-    assert out.returncode == 0, out.stderr
+    from mvtk.cli import main
+
+    assert main(["init", str(tmp_path / "t"), "--name", 'a"b = 1']) == 0
     cfg = tomllib.loads((tmp_path / "t" / "study.toml").read_text(encoding="utf-8"))
     assert cfg["study"] == {"name": 'a"b = 1'}
 
@@ -119,7 +137,9 @@ def test_e_and_thickness_from_frequencies_is_not_identifiable():
     from mvtk.study._stages import identifiability
     from mvtk.updating import FrequencyTarget, Parameter, update
 
-    truth = copy.deepcopy(PLATE)
+    plate = copy.deepcopy(PLATE)
+    plate["mesh"] = {"element_size": 0.05}
+    truth = copy.deepcopy(plate)
     truth["materials"]["al"]["E"] = E_TRUE
     f = modal_analysis(build_model(truth), 5).fn_hz
     targets = [FrequencyTarget(float(x)) for x in f]
@@ -127,8 +147,8 @@ def test_e_and_thickness_from_frequencies_is_not_identifiable():
     t = Parameter("structure.layers.0.thickness", lower=1e-3, upper=4e-3)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        both = update(PLATE, [e, t], targets)
-        one = update(PLATE, [e], targets)
+        both = update(plate, [e, t], targets)
+        one = update(plate, [e], targets)
     v = identifiability(both, [e.path, t.path], 100.0)
     assert v["identifiable_study"] is False
     assert "condition number" in v["not_identifiable_why"]
@@ -140,9 +160,11 @@ def test_e_and_thickness_from_frequencies_is_not_identifiable():
     assert one.values[0] == pytest.approx(E_TRUE, rel=1e-4)
 
 
-def test_first_study_from_init_to_run_without_edits(tmp_path):
+def test_first_study_from_init_to_run_without_edits(tmp_path, capsys):
     """init -> run: targets paired with the right FE modes, E within 0.5 % of the truth,
-    the study's damping table equal to `mvtk damping` on the same file."""
+    two hammer records and two decays in one study, and the study's damping table equal
+    to `mvtk damping` on the same file."""
+    from mvtk.cli import main
     from mvtk.study import run
     from mvtk.study._init import init_study
 
@@ -151,8 +173,17 @@ def test_first_study_from_init_to_run_without_edits(tmp_path):
     test = tmp_path / "hammer.csv"
     f_true, seen_modes = _specimen_hammer_test(test)
     assert seen_modes == (1, 3, 5, 6)           # the sensor misses torsion modes 2 and 4
-    res = init_study(tmp_path / "study", structure=structure, measurements=[test])
+    # a second record of the same specimen, the sensor at a corner (sees the torsion
+    # modes), and two free decays of mode 1
+    _specimen_hammer_test(tmp_path / "hammer_corner.csv", sensor=(0.3, 0.0), seed=11)
+    _specimen_decay(tmp_path / "decay_a.csv", f_true[0], 5.0, 21)
+    _specimen_decay(tmp_path / "decay_b.csv", f_true[0], 2.0, 22)
+    files = [test, tmp_path / "hammer_corner.csv", tmp_path / "decay_a.csv",
+             tmp_path / "decay_b.csv"]
+    res = init_study(tmp_path / "study", structure=structure, measurements=files)
+    assert [t["kind"] for t in res.tests] == ["impact", "impact", "decay", "decay"]
     cfg = tomllib.loads(res.study.read_text(encoding="utf-8"))
+    assert set(cfg["measurements"]) == {"impact", "impact_2", "decay", "decay_2"}
     targets = cfg["updating"]["targets"]
     # the reliable peaks (modes 5 and 6, 58 Hz apart, may overlap) with their true mode
     truth = [seen_modes[int(np.argmin(np.abs(f_true - t["fn_hz"])))] for t in targets]
@@ -168,26 +199,64 @@ def test_first_study_from_init_to_run_without_edits(tmp_path):
     assert list(up["modes"]) == truth
     assert up["values"][0] == pytest.approx(E_TRUE, rel=5e-3)
     assert up["identifiable_study"] is True
+    d = out.results["damping"]
+    hp = d["half_power"]
+    assert set(hp["test"]) == {"impact", "impact_2"}
+    assert np.allclose(hp["zeta"], ZETA, rtol=0.1)
+    assert set(d["decays"]) == {"decay", "decay_2"}
+    for dec in d["decays"].values():
+        assert dec["envelope"]["zeta"][0] == pytest.approx(ZETA, rel=0.05)
     from mvtk.study._report import study_checks
 
     checks = {c.name: c for c in study_checks(out)}
+    assert all(c.passed for c in checks.values()), [c.name for c in checks.values()
+                                                    if not c.passed]
     assert checks["updated parameters identifiable from the targets"].passed
     n = len(targets)
-    assert all(checks[f"updated FE f{i}"].passed for i in range(1, n + 1))
-    assert all(checks[f"identified f{i} (half-power peak)"].passed for i in range(1, n + 1))
+    assert all(f"updated FE f{i}" in checks for i in range(1, n + 1))
+    assert all(f"identified f{i} (half-power peak)" in checks for i in range(1, n + 1))
+    repeats = [k for k in checks if k.startswith("zeta at")]
+    assert any("test impact_2 vs test impact" in k for k in repeats)
+    assert sum("decay" in k for k in repeats) == 2
 
     # one estimator: `mvtk damping` with the settings the study states gives its table
-    d = out.results["damping"]
-    opts = d["half_power_settings"]["impact"]["command_options"].split()
-    cli = subprocess.run([sys.executable, "-m", "mvtk", "damping", str(test), *opts,
-                          "--json"], capture_output=True, text=True, cwd=ROOT, check=False)
-    assert cli.returncode == 0, cli.stderr
-    rows = json.loads(cli.stdout)
-    hp = d["half_power"]
-    for key in ("fn_hz", "zeta", "f1_hz", "f2_hz"):
-        assert [r[key] for r in rows] == pytest.approx(hp[key], rel=1e-9, abs=0)
-    # and the defaults are the same: without --fn the command finds the same modes
-    cli = subprocess.run([sys.executable, "-m", "mvtk", "damping", str(test), "--json"],
-                         capture_output=True, text=True, cwd=ROOT, check=False)
-    rows = [r for r in json.loads(cli.stdout) if r["reliable"]]
-    assert [r["zeta"] for r in rows] == pytest.approx(hp["zeta"], rel=1e-9, abs=0)
+    for name, file in (("impact", test), ("impact_2", tmp_path / "hammer_corner.csv")):
+        opts = d["half_power_settings"][name]["command_options"].split()
+        capsys.readouterr()
+        assert main(["damping", str(file), *opts, "--json"]) in (0, 1)
+        rows = json.loads(capsys.readouterr().out)
+        mine = [i for i, t in enumerate(hp["test"]) if t == name]
+        for key in ("fn_hz", "zeta", "f1_hz", "f2_hz"):
+            assert [r[key] for r in rows] == pytest.approx([hp[key][i] for i in mine],
+                                                           rel=1e-9, abs=0)
+    # and the defaults are the same: without options the command finds the same modes
+    capsys.readouterr()
+    main(["damping", str(test), "--json"])
+    rows = [r for r in json.loads(capsys.readouterr().out) if r["reliable"]]
+    first = [i for i, t in enumerate(hp["test"]) if t == "impact"]
+    assert [r["zeta"] for r in rows] == pytest.approx([hp["zeta"][i] for i in first],
+                                                      rel=1e-9, abs=0)
+
+
+def test_init_hints_at_a_coarse_mesh(tmp_path):
+    """A 3 x 2 element plate: the refined mesh moves the paired modes by more than the
+    target tolerance, and init says so with the refined frequencies (checked by an
+    independent solve of the 0.05 m mesh); the 0.025 m mesh of the chain above needs
+    no hint for mode 1."""
+    from mvtk.fe import build_model, modal_analysis
+    from mvtk.study._init import init_study
+
+    test = tmp_path / "hammer.csv"
+    _specimen_hammer_test(test)
+    coarse = copy.deepcopy(PLATE)
+    coarse["mesh"] = {"element_size": 0.1}
+    _write_structure(tmp_path / "coarse.toml", coarse)
+    res = init_study(tmp_path / "s", structure=tmp_path / "coarse.toml", measurements=[test])
+    assert res.mesh_hint and res.mesh_hint[0].startswith("MESH:")
+    assert "MESH:" in res.study.read_text(encoding="utf-8")
+    fine = copy.deepcopy(coarse)
+    fine["mesh"] = {"element_size": 0.05}
+    f_fine = modal_analysis(build_model(fine), 8).fn_hz
+    for r in res.pairing:
+        assert r["fe_fn_refined_hz"] == pytest.approx(f_fine[r["fe_mode"] - 1], rel=1e-9)
+    assert any(abs(r["refined_change_pct"]) > 0.5 for r in res.pairing)
