@@ -38,6 +38,9 @@ def study_checks(res: StudyResult) -> list[Check]:
     tol = res.study.config["checks"]
     src = _ref(res, "source", "references")
     checks: list[Check] = []
+    # the independent checks of each damping estimate (half-power row i, or
+    # ("decay", name)): an estimate its estimator flagged is only accepted when one passes
+    confirm: dict = {}
     targets = _target_frequencies(res)
     dmp = res.results.get("damping", {})
     hp = dmp.get("half_power")
@@ -61,20 +64,24 @@ def study_checks(res: StudyResult) -> list[Check]:
             if j is not None and j < len(zref):
                 checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[j],
                                     tol["identified_zeta_rel"], "", source=src))
+                confirm.setdefault(i, []).append(checks[-1])
     truth_pair = _truth_rayleigh(res)
     if hp and truth_pair:
         for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
-            if i >= len(_ref(res, "zeta", [])) and np.isfinite([fn, z]).all():
+            if i not in confirm and np.isfinite([fn, z]).all():
                 w = 2 * np.pi * fn
                 checks.append(Check(f"identified zeta{i + 1} at {fn:.1f} Hz vs SYNTHETIC truth",
                                     z, truth_pair[0] / (2 * w) + truth_pair[1] * w / 2,
                                     tol["identified_zeta_rel"], "",
                                     source="data/make_smart_beam_data.py"))
+                confirm.setdefault(i, []).append(checks[-1])
     env = dmp.get("envelope")
     zref = _ref(res, "zeta", [])
     if env and zref:
         checks.append(Check("identified zeta1 (envelope fit of the free decay)",
                             env["zeta"][0], zref[0], tol["identified_zeta_rel"], "", source=src))
+        confirm.setdefault(("decay", next(iter(dmp.get("decays") or {"decay": 0}))),
+                           []).append(checks[-1])
     rh = dmp.get("rayleigh_half_power")
     if rh and _ref(res, "half_power_alpha") is not None:
         checks.append(Check("Rayleigh alpha (half-power)", rh["alpha"],
@@ -83,7 +90,8 @@ def study_checks(res: StudyResult) -> list[Check]:
         checks.append(Check("Rayleigh beta (half-power)", rh["beta"],
                             _ref(res, "half_power_beta"), tol["rayleigh_rel"], "s", source=src))
     checks += _correlation_checks(res, tol)
-    checks += _consistency_checks(res, tol)
+    checks += _consistency_checks(res, tol, confirm)
+    checks += _flagged_estimates(res, confirm)
     up = res.results.get("updating")
     if up and "identifiable_study" in up:
         checks.append(Check(
@@ -199,7 +207,46 @@ def _rows_by_test(dmp: dict, hp: dict) -> list[tuple[list[int], list[float]]]:
     return out
 
 
-def _repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
+def _flagged_estimates(res: StudyResult, confirm: dict) -> list[Check]:
+    """A damping estimate its estimator did not mark reliable (too few lines, a close
+    mode, noise, NaN: the warnings of the damping stage) counts in the verdict: it
+    passes only when an independent value confirms it (a reference, the SYNTHETIC
+    truth, another test or a decay of the same mode, within their tolerances)."""
+    d = res.results.get("damping", {})
+    hp = d.get("half_power") or {}
+    out = []
+    tests = list(hp.get("test", ["impact"] * len(hp.get("fn_hz", []))))
+    items = [(i, f"damping of mode {i + 1} ({hp['fn_hz'][i]:.4g} Hz, test {tests[i]}, "
+                 "half-power)", hp["zeta"][i], bool(hp.get("reliable", [True] * (i + 1))[i]),
+              str((hp.get("reason") or [""] * (i + 1))[i] or hp.get("quality", [""])[i]))
+             for i in range(len(hp.get("fn_hz", [])))]
+    for name, dec in (d.get("decays") or {}).items():
+        env = dec.get("envelope") or {}
+        if env.get("zeta"):
+            items.append((("decay", name), f"damping of the decay {name} (envelope fit)",
+                          env["zeta"][0], bool((env.get("reliable") or [True])[0]),
+                          str((env.get("reason") or [""])[0])))
+    for key, label, z, reliable, why in items:
+        finite = z is not None and np.isfinite(z)
+        if reliable and finite:
+            continue
+        ok = finite and any(c.passed for c in confirm.get(key, []))
+        why = why if finite else "no estimate (NaN)"
+        out.append(Check(f"{label}: flagged by its estimator ({why})"
+                         + ("; confirmed by an independent value" if ok
+                            else "; no independent value confirms it"),
+                         1.0 if ok else 0.0, 1.0, 0.0, "", kind="lower",
+                         source="estimator verdict and the checks above"))
+    up = res.results.get("updating")
+    if up and "success" in up:
+        out.append(Check("updating converged" + ("" if up["success"] else
+                                                 f" (not: {up.get('message', '')})"),
+                         1.0 if up["success"] else 0.0, 1.0, 0.0, "", kind="lower",
+                         source="mvtk.updating.update"))
+    return out
+
+
+def _repeat_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Check]:
     """The same mode measured twice: by two impact tests, or by a decay and a hammer
     test. Each later estimate is compared with the first (``zeta_consistency_rel``)."""
     d = res.results.get("damping", {})
@@ -218,6 +265,8 @@ def _repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
             out.append(Check(f"zeta at {f[i]:.1f} Hz: test {tests[i]} vs test {tests[j]} "
                              "(half-power)", hp["zeta"][i], hp["zeta"][j],
                              tol["zeta_consistency_rel"], "", source="same mode, two tests"))
+            confirm.setdefault(i, []).append(out[-1])
+            confirm.setdefault(j, []).append(out[-1])
     for name, dec in (d.get("decays") or {}).items():
         env = dec.get("envelope") or {}
         for fe, ze in zip(env.get("fn_hz", []), env.get("zeta", [])):
@@ -229,10 +278,12 @@ def _repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
                                  f"test {tests[j]} (half-power)", ze, hp["zeta"][j],
                                  tol["zeta_consistency_rel"], "",
                                  source="same mode, two methods"))
+                confirm.setdefault(j, []).append(out[-1])
+                confirm.setdefault(("decay", name), []).append(out[-1])
     return out
 
 
-def _consistency_checks(res: StudyResult, tol: dict) -> list[Check]:
+def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Check]:
     """The same quantity from two sections: damping (half-power vs multi-point
     identification), and the quality (MPC, MPD) of the multi-point shapes the study uses.
 
@@ -242,7 +293,7 @@ def _consistency_checks(res: StudyResult, tol: dict) -> list[Check]:
     the peak, so the check is that it is not *below* the half-power value (an upper bound
     of the damping), and its name says so.
     """
-    out: list[Check] = _repeat_checks(res, tol)
+    out: list[Check] = _repeat_checks(res, tol, confirm)
     mod = res.results.get("modal")
     hp = res.results.get("damping", {}).get("half_power")
     if mod and hp:

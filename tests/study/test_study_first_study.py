@@ -260,3 +260,35 @@ def test_init_hints_at_a_coarse_mesh(tmp_path):
     for r in res.pairing:
         assert r["fe_fn_refined_hz"] == pytest.approx(f_fine[r["fe_mode"] - 1], rel=1e-9)
     assert any(abs(r["refined_change_pct"]) > 0.5 for r in res.pairing)
+
+
+def _fake_run(updating: dict, hp: dict):
+    from types import SimpleNamespace
+
+    from mvtk.study._config import CHECK_KEYS
+
+    study = SimpleNamespace(config={"checks": dict(CHECK_KEYS), "updating": updating})
+    return SimpleNamespace(study=study, results={"damping": {
+        "half_power": hp, "fn_guess_hz": [100.0, 300.0]}}, arrays={})
+
+
+def test_identification_checks_do_not_depend_on_the_target_form():
+    """targets_hz and [[updating.targets]] give the same checks; a NaN damping fails the
+    verdict; modes are checked against the target of the same mode, not by position."""
+    from mvtk.study._report import study_checks
+
+    hp = {"fn_hz": [100.2, 299.0], "zeta": [0.01, float("nan")], "reliable": [True, False],
+          "reason": ["", "half-power points not found"], "quality": ["ok", "failed"],
+          "test": ["impact", "impact"]}
+    # a target list that lacks the 100 Hz mode: 299 Hz is checked against 300 Hz
+    forms = ({"targets_hz": [300.0]}, {"targets": [{"fn_hz": 300.0, "mode": 3}]})
+    names = []
+    for up in forms:
+        checks = study_checks(_fake_run(up, hp))
+        names.append(sorted((c.name, c.passed) for c in checks))
+        by = {c.name: c for c in checks}
+        assert by["identified f2 (half-power peak)"].reference == 300.0
+        assert "identified f1 (half-power peak)" not in by
+        bad = [c for c in checks if c.name.startswith("damping of mode 2")]
+        assert len(bad) == 1 and not bad[0].passed and "NaN" in bad[0].name
+    assert names[0] == names[1]
