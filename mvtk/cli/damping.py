@@ -60,6 +60,9 @@ def add_parser(subparsers) -> None:
     frf.add_argument("--impact", action="store_true", help="same as --excitation impact")
     frf.add_argument("--nperseg", type=int, default=None,
                      help="FRF segment/record length (default: chosen from the data)")
+    frf.add_argument("--force-window", type=float, default=None, metavar="S",
+                     help="impact: keep the force for S seconds after the hit (default: 4 x "
+                     "the measured pulse width)")
     dec = p.add_argument_group("free decay")
     dec.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
                      help="band-pass edges in Hz for the decay fits (one mode)")
@@ -92,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
                                channel=args.channel, reference=args.reference,
                                excitation="impact" if args.impact else args.excitation,
                                nperseg=args.nperseg, band_hz=args.band,
+                               force_window_s=("auto" if args.force_window is None
+                                               else args.force_window),
                                t_start_s=args.t_start, t_end_s=args.t_end)
             except ParameterError as err:
                 if isinstance(err, NoEstimateError) or "is not a variant" not in str(err):

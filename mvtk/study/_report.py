@@ -471,6 +471,21 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
             "cumulative": np.cumsum(pair["mass_fraction"])}),
             "chowdhury_pairing", "Identified modes paired with FE modes (effective mass)",
             passed_column=None)
+    sett = d.get("half_power_settings") or {}
+    files = {k: p.name for k, p in res.study.measurement_files.items()}
+    if sett:
+        parts = []
+        for name, st in sett.items():
+            rec = (f"{st['frf_nperseg']} samples per record"
+                   if st.get("frf_nperseg") is not None else "record chosen from the data")
+            pad = (f", FFT length {st['frf_nfft']}" if st.get("frf_nfft") not in
+                   (None, st.get("frf_nperseg")) else "")
+            parts.append(f"{name} ({files.get(name, '')}): {st.get('variant')} variant, "
+                         f"{rec}{pad}; the same table: `mvtk damping {files.get(name, 'FILE')}"
+                         f" {st.get('command_options', '')}`")
+        sec.text("Half-power estimates by mvtk.damping.estimate, the estimator of `mvtk "
+                 "damping`, with its defaults unless the study sets them: "
+                 + "; ".join(parts) + ".")
     decays = d.get("decays") or {}
     if len(decays) > 1:
         sec.table(pd.DataFrame([

@@ -132,9 +132,11 @@ def _impact_half_power(arrays, test: str, m: dict, fn_guess: list[float], method
                 or hasattr(v, "item")}
     opts = [f"--reference {m['reference']}", f"--channel {m['response']}", "--impact",
             "--method half_power", f"--variant {est.variant}",
-            "--fn " + " ".join(f"{f:.17g}" for f in fn_guess)]
+            "--fn " + " ".join(repr(float(f)) for f in fn_guess)]
     if nperseg is not None:
         opts.append(f"--nperseg {nperseg}")
+    if fw is not None:
+        opts.append(f"--force-window {float(fw)!r}")
     settings["command_options"] = " ".join(opts)
     settings["force_window_given"] = fw is not None
     return est.frf, est.table.to_dict(orient="list"), _warning_messages(caught), settings
@@ -329,8 +331,9 @@ def damping(study: Study, arrays, description: dict, known_fn_hz=None):
                "settings": {"method": "envelope", "variant": "hilbert", "fn_hz": f0,
                             "band_hz": band,
                             "command_options": f"--channel {m['channel']} --method envelope "
-                            f"--fn {f0:.17g}" + ("" if band is None else
-                                                 f" --band {band[0]:.17g} {band[1]:.17g}")}}
+                            f"--fn {float(f0)!r}" + ("" if band is None else
+                                                    f" --band {float(band[0])!r} "
+                                                    f"{float(band[1])!r}")}}
         result["decays"][name] = one
         if k:
             continue
