@@ -199,6 +199,14 @@ def test_first_study_from_init_to_run_without_edits(tmp_path, capsys):
     assert list(up["modes"]) == truth
     assert up["values"][0] == pytest.approx(E_TRUE, rel=5e-3)
     assert up["identifiable_study"] is True
+    # Table 2's nominal column: the nominal FE frequency of each target's paired mode
+    import pandas as pd
+
+    from mvtk.fe import build_model, modal_analysis
+
+    f_nom = modal_analysis(build_model(PLATE), 8).fn_hz
+    t2 = pd.read_csv(tmp_path / "report" / "tables" / "table2_frequencies.csv")
+    assert list(t2["FE nominal"]) == pytest.approx([f_nom[m - 1] for m in truth], rel=1e-6)
     d = out.results["damping"]
     hp = d["half_power"]
     assert set(hp["test"]) == {"impact", "impact_2"}
