@@ -18,8 +18,7 @@ from ._commands import COMMANDS
 
 __all__ = ["add_parser", "run"]
 
-_METHODS = ("auto", "half_power", "envelope", "log_decrement")
-_VARIANTS = {"half_power": ("fit", "interpolate"), "envelope": ("hilbert", "peaks")}
+_METHODS = ("auto", "half_power", "envelope", "log_decrement")   # mvtk.damping.METHODS
 
 
 def add_parser(subparsers) -> None:
@@ -61,6 +60,9 @@ def add_parser(subparsers) -> None:
     frf.add_argument("--impact", action="store_true", help="same as --excitation impact")
     frf.add_argument("--nperseg", type=int, default=None,
                      help="FRF segment/record length (default: chosen from the data)")
+    frf.add_argument("--force-window", type=float, default=None, metavar="S",
+                     help="impact: keep the force for S seconds after the hit (default: 4 x "
+                     "the measured pulse width)")
     dec = p.add_argument_group("free decay")
     dec.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), default=None,
                      help="band-pass edges in Hz for the decay fits (one mode)")
@@ -70,103 +72,37 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
-def _has_reference(ds, args) -> bool:
-    th = ds["time_history"]
-    if args.reference is not None:
-        return True
-    return "quantity" in th.coords and "force" in [str(q) for q in th["quantity"].values]
-
-
-_MOTION = ("displacement", "velocity", "acceleration")
-
-
-def _half_power_input(ds, args, notes):
-    from .. import signal
-
-    if "time_history" in ds.data_vars and not any(v in ds.data_vars for v in
-                                                  ("frf", "psd", "auto_spectrum", "spectrum")):
-        ref = args.reference if args.reference is not None else {"quantity": "force"}
-        excitation = "impact" if args.impact else args.excitation
-        resp = args.channel
-        th = ds["time_history"]
-        if resp is None and "quantity" in th.coords:
-            # a trigger or monitoring voltage is not a response: motion channels only
-            motion = [str(c) for c, q in zip(th["channel"].values, th["quantity"].values)
-                      if str(q) in _MOTION and str(c) != args.reference]
-            if motion and len(motion) < th.sizes["channel"] - 1:
-                resp = motion
-                notes.append(f"responses: the motion channels {motion}")
-        fr = signal.frf(ds, ref, response=resp, excitation=excitation, nperseg=args.nperseg)
-        notes.append(f"FRF: H1, {fr.attrs['excitation']} excitation, "
-                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}"
-                     + ("; peaks searched in the excited band {:.5g}..{:.5g} Hz".format(
-                         *fr.attrs["excitation_band_hz"])
-                        if fr.attrs.get("excitation") == "sweep" else ""))
-        return fr
-    if args.channel is not None:
-        for name in ("frf", "psd", "auto_spectrum", "spectrum"):
-            if name in ds.data_vars:
-                var = ds[name]
-                dim = "response" if "response" in var.dims else "channel"
-                return ds[[name]].sel({dim: args.channel})
-    return ds
-
-
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk damping``; returns the exit code (errors propagate as MvtkError)."""
     from ._common import spare_dask_probe
 
     spare_dask_probe()
-    import pandas as pd
-
     from .. import io
     from ..damping._common import NoEstimateError
-    from ..damping._decay import envelope_fit, log_decrement
-    from ..damping._half_power import half_power
+    from ..damping._estimate import estimate
     from ..errors import ParameterError
     from ._common import reader_options
 
     method = args.method
-    variant = args.variant
     notes: list[str] = []
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             ds = io.read(args.file, **reader_options(args))
-            if method == "auto":
-                method = "half_power"
-                if "time_history" in ds.data_vars and not _has_reference(ds, args) and not any(
-                        v in ds.data_vars for v in ("frf", "psd", "auto_spectrum", "spectrum")):
-                    method = "envelope"
-                notes.append(f"method: {method} (auto)")
-            if variant is not None and variant not in _VARIANTS.get(method, ()):
-                raise ParameterError(
-                    f"--variant {variant!r} is not a variant of {method}; expected one of "
-                    f"{list(_VARIANTS.get(method, ()))}")
-            if method == "half_power":
-                res = half_power(_half_power_input(ds, args, notes), fn_hz=args.fn,
-                                 n_modes=args.n_modes, fmin=args.fmin, fmax=args.fmax,
-                                 method=variant or "fit")
-                table = res.to_dataframe()
-            else:
-                th = ds
-                if "time_history" in ds.data_vars and args.channel is None \
-                        and "quantity" in ds["time_history"].coords:
-                    # a decay fit of the hammer or of a voltage makes no sense by default
-                    q = [str(v) for v in ds["time_history"]["quantity"].values]
-                    keep = [i for i, v in enumerate(q) if v != "force"]
-                    if keep and len(keep) < len(q):
-                        th = ds["time_history"].isel(channel=keep)
-                kw = dict(channel=args.channel, band_hz=args.band, t_start_s=args.t_start,
-                          t_end_s=args.t_end)
-                if method == "envelope":
-                    kw["method"] = variant or "hilbert"
-                    est = envelope_fit
-                else:
-                    est = log_decrement
-                fns = args.fn or [None]
-                table = pd.concat([est(th, fn_hz=f, **kw).to_dataframe() for f in fns],
-                                  ignore_index=True)
+            try:
+                res = estimate(ds, method=method, variant=args.variant, fn_hz=args.fn,
+                               n_modes=args.n_modes, fmin=args.fmin, fmax=args.fmax,
+                               channel=args.channel, reference=args.reference,
+                               excitation="impact" if args.impact else args.excitation,
+                               nperseg=args.nperseg, band_hz=args.band,
+                               force_window_s=("auto" if args.force_window is None
+                                               else args.force_window),
+                               t_start_s=args.t_start, t_end_s=args.t_end)
+            except ParameterError as err:
+                if isinstance(err, NoEstimateError) or "is not a variant" not in str(err):
+                    raise
+                raise ParameterError(f"--{err}") from None
+            method, table, notes = res.method, res.table, res.notes
     except NoEstimateError as err:
         sys.stderr.write(f"mvtk damping: no reliable estimate: {err}\n")
         if args.json:
@@ -189,7 +125,7 @@ def run(args: argparse.Namespace) -> int:
             verdict += ("; the records are not free decays: for ambient or operational "
                         "records use `mvtk modal` (SSI-cov)")
     if args.json:
-        sys.stdout.write(table.to_json(orient="records") + "\n")
+        sys.stdout.write(table.to_json(orient="records", double_precision=15) + "\n")
     else:
         for note in notes:
             sys.stdout.write(note + "\n")

@@ -32,7 +32,19 @@ def _init(args: argparse.Namespace) -> int:
               f"check it with `mvtk modes {res.structure} -n 6`")
     for t in res.tests:
         what = t["kind"] if t["kind"] != "skipped" else f"skipped: {t['why']}"
-        print(f"  {t['file']}: {what}" + (f" ({t['note']})" if t.get("note") else ""))
+        if t.get("note"):
+            what += f" ({t['note']})"
+        if t.get("n_peaks") is not None:
+            what += f"; {len(t.get('fn_hz') or [])} of {t['n_peaks']} peaks reliable"
+        if t.get("warnings"):
+            what += f"; {len(t['warnings'])} warning(s) in {res.study.parent / 'init.log'}"
+        print(f"  {t['file']}: {what}")
+    if res.pairing:
+        print("  targets paired with FE modes by frequency: " + ", ".join(
+            f"{r['fn_hz']:.5g} Hz -> mode {r['fe_mode']} ({r['fe_fn_hz']:.5g} Hz)"
+            for r in res.pairing))
+    for line in res.mesh_hint:
+        print(f"  {line}")
     print(f"next: {res.next_command}")
     return 0
 

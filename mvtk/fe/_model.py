@@ -148,18 +148,52 @@ class FEModel:
         return int(sum(len(c) for c in self.elements.values()))
 
     # ------------------------------------------------------------- DOF lookup
-    def dof_index(self, node: int, component: int | str) -> int:
+    def node_index(self, node_id: int) -> int:
+        """Row of ``nodes`` of the node labelled ``node_id`` (:attr:`node_ids`).
+
+        Raises
+        ------
+        ParameterError
+            No node has that label.
+        """
+        ids = (np.asarray(self.node_ids) if self.node_ids is not None
+               else np.arange(1, self.n_nodes + 1))
+        hit = np.flatnonzero(ids == int(node_id))
+        if hit.size != 1:
+            raise ParameterError(f"no node has the ID {node_id} (IDs {int(ids.min())}.."
+                                 f"{int(ids.max())}, {ids.size} nodes)")
+        return int(hit[0])
+
+    def dof_index(self, node: int, component: int | str, *, by: str = "index") -> int:
         """Index of the free DOF ``component`` of ``node``.
+
+        Parameters
+        ----------
+        node : int
+            The node: its index (row of :attr:`nodes`, 0-based) with ``by="index"``, its
+            label (:attr:`node_ids`, 1-based by default, an imported mesh's own IDs)
+            with ``by="id"``.
+        component : int or str
+            Index into :data:`DOF_NAMES` or its name (``"uz"``).
+        by : {"index", "id"}
 
         Raises
         ------
         ParameterError
             If the node does not exist or that DOF is constrained.
         """
+        if by not in ("index", "id"):
+            raise ParameterError(f"by must be 'index' or 'id', got {by!r}")
         c = _component_index(component)
-        node = int(node)
+        node = int(node) if by == "index" else self.node_index(node)
         if not 0 <= node < self.n_nodes:
-            raise ParameterError(f"node {node} does not exist (model has {self.n_nodes} nodes)")
+            hint = ""
+            if self.node_ids is not None and np.any(np.asarray(self.node_ids) == node):
+                hint = (f"; {node} is the ID of the node with index "
+                        f"{self.node_index(node)}: pass by='id' for node IDs")
+            raise ParameterError(f"node index {node} does not exist (model has "
+                                 f"{self.n_nodes} nodes, indices 0..{self.n_nodes - 1})"
+                                 + hint)
         i = int(self._lookup[node * 6 + c])
         if i < 0:
             raise ParameterError(

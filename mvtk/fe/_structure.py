@@ -84,7 +84,19 @@ plates (multiplied by the width to the beam's total spring), ``supports`` and
 ends; points by ``x`` (``y``, if given, within the width).
 
 Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
-the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
+the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md), and, like meshes,
+``[[masses]]`` (an accelerometer, an added mass)::
+
+    [[masses]]
+    point = "tip"                         # a [[points]] name or a one-node set
+    mass = 0.020                          # kg
+    inertia = [1e-7, 1e-7, 2e-7]          # kg m^2 about the mass centre: 3 values (diagonal),
+                                          # 6 [Jxx, Jyy, Jzz, Jxy, Jyz, Jxz] or 3x3
+    axes = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]  # optional: body axes (rows, global coords)
+                                          # in which inertia is given; rotated to global
+    offset = [0.0, 0.0, 0.005]            # m, node to mass centre
+
+A ``type = "mesh"``
 structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
 ``[[masses]]``, ``[[rigid_links]]``, ``[[points]]`` with x, y, z,
 ``[coordinate_systems.*]``, ``boundary.frames`` and ``[[loads]]``
@@ -384,7 +396,7 @@ def _build_model(structure: Mapping | str | Path) -> FEModel:
                           "imported mesh replaces the built-in plate/beam generator")
     if kind == "mesh":
         return _build_mesh(s, st, materials, source)
-    for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
+    for key, why in (("sections", "for imported meshes"),
                      ("rigid_links", "for imported meshes"),
                      ("coordinate_systems", "for imported meshes and Nastran decks"),
                      ("loads", "for imported meshes and Nastran decks")):
@@ -463,7 +475,7 @@ def _build_model(structure: Mapping | str | Path) -> FEModel:
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
         model = _plate_piezo(model, s.get("patches", []), patches, len(layers))
-        return _with_series(constrain_model(model, general, ()))
+        return _with_series(_with_masses(constrain_model(model, general, ()), s))
     except ConfigError:
         raise
     except MvtkError as err:
@@ -604,6 +616,102 @@ _SHAPES = {
 }
 
 
+#: Keys of a ``[[masses]]`` table.
+_MASS_KEYS = ("point", "mass", "inertia", "axes", "offset")
+
+
+def _inertia(m: Mapping, where: str) -> np.ndarray:
+    """The 3x3 rotary inertia (kg m^2, about the mass centre, global axes) of a mass.
+
+    ``inertia`` is 3 values (the diagonal), 6 values ``[Jxx, Jyy, Jzz, Jxy, Jyz, Jxz]``
+    (the tensor's entries, symmetric) or a 3x3 array; with ``axes`` (3 rows: the unit
+    vectors of the body axes in global coordinates, orthonormal and right-handed) the
+    tensor is given in the body axes and rotated to the global ones, ``J = R' J_b R``
+    with ``R`` the rows of ``axes``.
+    """
+    v = m.get("inertia", [0.0, 0.0, 0.0])
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        a = np.zeros(0)
+    if isinstance(v, bool) or a.shape not in ((3,), (6,), (3, 3)) or not np.isfinite(a).all():
+        raise ConfigError(f"{where}inertia: expected 3 numbers (diagonal), 6 numbers [Jxx, "
+                          f"Jyy, Jzz, Jxy, Jyz, Jxz] or a 3x3 array in kg m^2, got {v!r}")
+    if a.shape == (3,):
+        J = np.diag(a)
+    elif a.shape == (6,):
+        J = np.array([[a[0], a[3], a[5]], [a[3], a[1], a[4]], [a[5], a[4], a[2]]])
+    else:
+        J = a
+    if not np.allclose(J, J.T, rtol=1e-9, atol=1e-12 * max(1.0, np.abs(J).max())):
+        raise ConfigError(f"{where}inertia: the 3x3 tensor must be symmetric, got {v!r}")
+    if np.linalg.eigvalsh(0.5 * (J + J.T)).min() < -1e-12 * max(np.abs(J).max(), 1e-300):
+        raise ConfigError(f"{where}inertia: the tensor must be positive semi-definite "
+                          f"(principal values {np.linalg.eigvalsh(J).round(12).tolist()})")
+    if "axes" in m:
+        try:
+            R = np.asarray(m["axes"], dtype=float)
+        except (TypeError, ValueError):
+            R = np.zeros(0)
+        if R.shape != (3, 3) or not np.isfinite(R).all():
+            raise ConfigError(f"{where}axes: expected 3 rows of 3 numbers (the body axes "
+                              f"in global coordinates), got {m['axes']!r}")
+        if not np.allclose(R @ R.T, np.eye(3), atol=1e-6) or np.linalg.det(R) < 0:
+            raise ConfigError(f"{where}axes: the rows must be orthonormal unit vectors of a "
+                              f"right-handed frame, got {m['axes']!r}")
+        J = R.T @ J @ R
+    return 0.5 * (J + J.T)
+
+
+def _with_masses(model, s: Mapping):
+    """``model`` with the ``[[masses]]`` of a generated plate or beam added to M.
+
+    Each mass sits at a named point (``[[points]]``) or a one-node set of the model; its
+    6x6 matrix (:class:`PointMass`: translation mass, rotary inertia, offset of the mass
+    centre) is added on the node's free DOFs (a constrained DOF carries no inertia).
+    """
+    import dataclasses
+
+    import scipy.sparse as sp
+
+    from ._general import PointMass
+
+    masses = s.get("masses", [])
+    if not masses:
+        return model
+    if not isinstance(masses, list):
+        raise ConfigError("masses: expected an array of tables [[masses]]")
+    rows, cols, vals = [], [], []
+    for i, m in enumerate(masses):
+        w = f"masses[{i}]"
+        if not isinstance(m, Mapping):
+            raise ConfigError(f"{w}: expected a table")
+        _check_keys(m, w, _MASS_KEYS)
+        name = m.get("point")
+        nodes = model.node_sets.get(name) if isinstance(name, str) else None
+        if nodes is None or len(nodes) != 1:
+            raise ConfigError(f"{w}.point: expected the name of a [[points]] entry or a "
+                              f"one-node set, got {name!r}; points and sets: "
+                              f"{sorted(k for k, v in model.node_sets.items() if len(v) == 1)}")
+        node = int(nodes[0])
+        try:
+            mat = PointMass(node, _number(m, "mass", w + ".", positive=False),
+                            _inertia(m, w + "."),
+                            _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])).matrix()
+        except MvtkError as err:
+            raise ConfigError(f"{w}: {err}") from err
+        free = np.flatnonzero(model.dof_node == node)
+        comp = model.dof_component[free]
+        for a, ia in zip(comp, free):
+            for b, ib in zip(comp, free):
+                if mat[a, b] != 0.0:
+                    rows.append(int(ia))
+                    cols.append(int(ib))
+                    vals.append(float(mat[a, b]))
+    dM = sp.csr_matrix((vals, (rows, cols)), shape=model.M.shape)
+    return dataclasses.replace(model, M=(model.M + dM).tocsr())
+
+
 def _vec(d: Mapping, key: str, where: str, default):
     v = d.get(key, default)
     if (not isinstance(v, list | tuple) or len(v) != 3
@@ -724,18 +832,13 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"masses[{i}]"
         if not isinstance(m, Mapping):
             raise ConfigError(f"{w}: expected a table")
-        _check_keys(m, w, ("point", "mass", "inertia", "offset", "system"))
+        _check_keys(m, w, (*_MASS_KEYS, "system"))
         node_ = one_node(m.get("point"), w + ".point")
-        inertia = m.get("inertia", [0.0, 0.0, 0.0])
-        if isinstance(inertia, list) and len(inertia) == 3 and all(
-                isinstance(r, list) for r in inertia):
-            J = np.array(inertia, dtype=float)  # a full tensor [[Ixx, Ixy, Ixz], ...]
-            if J.shape != (3, 3):
-                raise ConfigError(f"{w}.inertia: expected 3 numbers or a 3 x 3 tensor")
-        else:
-            J = _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0])
         frame = None
         if "system" in m:
+            if "axes" in m:
+                raise ConfigError(f"{w}: give the body axes either as axes or as system, "
+                                  "not both")
             systems_ = coordinate_systems(s)
             if m["system"] not in systems_:
                 raise ConfigError(f"{w}.system: {m['system']!r} is not defined; defined: "
@@ -743,8 +846,8 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
             frame = systems_[m["system"]].axes_at(mesh.nodes[node_])
         try:
             members.append(PointMass(node_, _number(m, "mass", w + ".", positive=False),
-                                     J, _vec(m, "offset", w + ".", [0.0, 0.0, 0.0]),
-                                     frame))
+                                     _inertia(m, w + "."),
+                                     _vec(m, "offset", w + ".", [0.0, 0.0, 0.0]), frame))
             members[-1].matrix()
         except MvtkError as err:
             raise ConfigError(f"{w}: {err}") from err
@@ -913,7 +1016,7 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
             clamp_translational_stiffness=None if cts is None else cts * width,
             points=points, shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
-        return constrain_model(model, general, springs)
+        return _with_masses(constrain_model(model, general, springs), s)
     except ConfigError:
         raise
     except MvtkError as err:

@@ -7,10 +7,12 @@ module adds the cross-key rules and resolves the files. Overview (see
 
     [study]            name, synthetic (bool)
     [structure]        file (structure TOML, relative to the study file)
-    [measurements.impact]  file, reference, response, record_s, force_window_s
+    [measurements.impact]  file, reference, response, record_s, force_window_s, fn_hz
     [measurements.broadband]  same keys as impact: a short broadband impact test for the
                        higher modes (its modes are listed in damping.broadband_fn_hz)
-    [measurements.decay]   file, channel, band_hz
+    [measurements.decay]   file, channel, band_hz, fn_hz
+    [measurements.<any name>]  kind = "impact" | "decay" and the keys of that kind: any
+                       number of hammer records and decays, each with its own options
     [damping]          fn_hz, broadband_fn_hz, half_power_method, chowdhury_target_mass,
                        model_damping
     [fe]               n_modes

@@ -116,6 +116,7 @@ def modal(study):
         "n_responses": int(frf.sizes["response"]),
         "n_references": int(frf.sizes["reference"]),
         "n_lines": int(frf.sizes["frequency"]),
+        "df_hz": float(np.median(np.diff(np.asarray(frf["frequency"].values, dtype=float)))),
         "band_hz": [float(cfg["fmin_hz"]), float(cfg["fmax_hz"])],
         "frf_type": str(frf.attrs.get("frf_type", "")),
         "table": table.to_dict(orient="list"),

@@ -26,13 +26,20 @@ import numpy as np
 from .._atomic import write_text
 from ..errors import ConfigError, MvtkError
 
-__all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE", "mesh_structure_toml"]
+__all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE", "PLACEHOLDER_MARK",
+           "mesh_structure_toml", "placeholder_structure"]
 
 #: Suffixes of Nastran bulk-data decks (the whole model, sections included, in the file).
 _NASTRAN = (".bdf", ".dat", ".nas")
 
+#: The line that marks init's placeholder structure: ``mvtk run`` refuses a structure
+#: file that still holds it.
+PLACEHOLDER_MARK = "# mvtk: PLACEHOLDER structure"
+
 #: Structure file written when the user gives none: a clamped steel plate to edit.
-STRUCTURE_TEMPLATE = '''\
+STRUCTURE_TEMPLATE = f'''\
+{PLACEHOLDER_MARK} -- EDIT it to your structure, then delete this line
+# (`mvtk run` refuses the study while it is here).
 # Structure description (mvtk.fe.build_model; reference: docs, "Structure TOML").
 # A PLACEHOLDER written by `mvtk init`: replace the geometry, materials, layers, mesh and
 # boundary conditions with those of your structure (SI units: m, Pa, kg/m^3), then check
@@ -76,32 +83,63 @@ class InitResult:
         ``modal`` or ``skipped``), what was found and why.
     next_command : str
         The command to run next.
+    pairing : list of dict
+        Each measured resonance (``fn_hz``) with the FE mode it was paired with by
+        frequency (``fe_mode``, 1-based among the elastic modes, ``fe_fn_hz``,
+        ``df_pct``; with a generated mesh also ``fe_fn_refined_hz`` and
+        ``refined_change_pct`` on a mesh refined twice); empty when the structure was not
+        solved (placeholder, mesh to edit, or a multi-point test whose shapes pair the
+        modes when the study runs).
+    mesh_hint : list of str
+        A mesh-convergence hint (lines) when the refined mesh changes a paired FE mode by
+        more than the default ``checks.updated_fn_rel``; empty otherwise.
     """
 
     study: Path
     structure: Path
     tests: list = field(default_factory=list)
     next_command: str = ""
+    pairing: list = field(default_factory=list)
+    mesh_hint: list = field(default_factory=list)
 
 
 def _rel(path: Path, start: Path) -> str:
     return Path(os.path.relpath(path.resolve(), start.resolve())).as_posix()
 
 
+def _toml(value) -> str:
+    """``value`` as a TOML value, written by tomli-w (strings escaped, never formatted)."""
+    import tomli_w
+
+    return tomli_w.dumps({"v": value}).split("=", 1)[1].strip()
+
+
 def _inline_table(options: dict) -> str:
     """A TOML inline table of reader options (strings, numbers, booleans, lists)."""
-    import json
+    return "{" + ", ".join(f"{_toml_key(str(k))} = {_toml(v)}" for k, v in options.items()) + "}"
 
-    return "{" + ", ".join(f"{k} = {json.dumps(v)}" for k, v in options.items()) + "}"
+
+def placeholder_structure(path: str | Path) -> bool:
+    """True when ``path`` is ``mvtk init``'s placeholder structure, not yet edited."""
+    try:
+        return PLACEHOLDER_MARK in Path(path).read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return False
 
 
 def _classify(path: Path, options: dict | None = None) -> dict:
     """What test a file holds: an impact test, a free decay, or a multi-point FRF set."""
-    try:
-        ds, used, note = _read_with_options(path, options)
-    except MvtkError as err:
-        return {"file": path, "kind": "skipped", "why": f"not readable: {err}"}
-    out = _classify_dataset(path, ds)
+    import warnings
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            ds, used, note = _read_with_options(path, options)
+            out = _classify_dataset(path, ds)
+        except MvtkError as err:
+            return {"file": path, "kind": "skipped", "why": f"not readable: {err}",
+                    "warnings": [f"{w.category.__name__}: {w.message}" for w in caught]}
+    out["warnings"] = [f"{w.category.__name__}: {w.message}" for w in caught]
     out["read_options"] = used
     if note:
         out["note"] = note
@@ -168,10 +206,12 @@ def _classify_dataset(path: Path, ds) -> dict:
         out["record_s"] = float(1.0 / res_hz) if np.isfinite(res_hz) and res_hz > 0 else float(
             th.sizes["time"] / fs)
         try:
-            hp = mvtk.damping.half_power(res["frf"])
-            tab = hp.to_dataframe()
-            keep = tab[tab["reliable"]] if "reliable" in tab and tab["reliable"].any() else tab
+            # the estimator of `mvtk damping` and of the study's damping stage
+            tab = mvtk.damping.estimate(sel, method="half_power", reference=forces[0],
+                                        channel=[others[0]], excitation="impact").table
+            keep = tab[tab["reliable"].astype(bool)] if "reliable" in tab else tab.iloc[:0]
             out["fn_hz"] = sorted(float(f) for f in keep["fn_hz"] if np.isfinite(f))
+            out["n_peaks"] = int(len(tab))
         except MvtkError as err:
             out["fn_hz"] = []
             out["why"] = f"no resonance found by the default estimator ({err})"
@@ -215,9 +255,12 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         placeholder plate written to ``folder/structure.toml``.
     measurements : sequence of path
         Measurement files: the first impact test becomes ``[measurements.impact]`` (its
-        resonances ``[damping] fn_hz`` and ``[updating] targets_hz``), a free decay
-        ``[measurements.decay]``, a multi-point FRF set (UFF 58 with node numbers)
-        ``[modal]``. Files that fit none are listed in the result with the reason.
+        reliable resonances ``[damping] fn_hz`` and the ``[[updating.targets]]``, each
+        paired with an FE mode of ``structure`` by frequency), every other hammer test
+        ``[measurements.impact_2]``, ... (with its own reliable resonances), the free
+        decays ``[measurements.decay]``, ``[measurements.decay_2]``, ..., a multi-point
+        FRF set (UFF 58 with node numbers) ``[modal]``. Files that fit none are listed in
+        the result with the reason.
     name : str, optional
         Study name (default: the folder name).
     overwrite : bool
@@ -287,16 +330,19 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     def geometry_line(commented: str) -> list[str]:
         if geometry is None:
             return [commented]
-        return [f'geometry = "{_rel(Path(geometry), folder)}"']
+        return [f"geometry = {_toml(_rel(Path(geometry), folder))}"]
 
     roving = _roving_sets(tests) if modal is None else []
     for t in roving:
         t["kind"] = "impact" if t is impact else "roving set"
         t["roving"] = True
+    more_impacts = [t for t in tests if t["kind"] == "impact" and t is not impact
+                    and not t.get("roving")]
+    more_decays = [t for t in tests if t["kind"] == "decay" and t is not decay]
     for t in tests:
-        if t["kind"] != "skipped" and t is not impact and t is not decay and t is not modal \
-                and not t.get("roving"):
-            t.update(kind="skipped", why=f"a second {t['kind']} test: add it by hand")
+        if t["kind"] == "modal" and t is not modal:
+            t.update(kind="skipped", why="a second multi-point FRF set: a study identifies "
+                     "one [modal] test")
 
     lines = [
         f"# Validation study written by `mvtk init` from {len(tests)} measurement file(s).",
@@ -304,10 +350,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "# section and key: the docs' 'Study file reference'. Paths are relative to this file.",
         "",
         "[study]",
-        f'name = "{name or folder.resolve().name}"',
+        f"name = {_toml(name or folder.resolve().name)}",
         "",
         "[structure]",
-        f'file = "{_rel(s_path, folder)}"'
+        f"file = {_toml(_rel(s_path, folder))}"
         + ("   # EDIT: a placeholder plate" if structure is None else
            "   # EDIT: written around your mesh" if not is_toml else ""),
         "",
@@ -315,42 +361,99 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "n_modes = 6",
         "",
     ]
-    if impact or decay:
+    if impact or decay or more_impacts:
         lines.append("[measurements]")
         lines.append("")
     if impact:
         lines += [
             "[measurements.impact]   # hammer test found by its force channel",
-            f'file = "{_rel(impact["file"], folder)}"',
-            f'reference = "{impact["reference"]}"',
-            f'response = "{impact["response"]}"',
-            f"record_s = {impact['record_s']:.6g}   # one record per hit (from the data)",
+            f"file = {_toml(_rel(impact['file'], folder))}",
+            f"reference = {_toml(impact['reference'])}",
+            f"response = {_toml(impact['response'])}",
+            f"# record_s = {impact['record_s']:.6g}   # default: chosen from the data, as "
+            "`mvtk damping` does",
             *opts_line(impact),
             "",
         ]
-    if decay:
+    for k, t in enumerate(more_impacts):
+        own = t.get("fn_hz") or []
         lines += [
-            "[measurements.decay]    # free decay (no force channel)",
-            f'file = "{_rel(decay["file"], folder)}"',
-            f'channel = "{decay["channel"]}"',
-            *opts_line(decay),
+            f"[measurements.impact_{k + 2}]   # another hammer test: its modes are a "
+            "consistency check",
+            'kind = "impact"',
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"reference = {_toml(t['reference'])}",
+            f"response = {_toml(t['response'])}",
+            (f"fn_hz = {_fmt_list(own)}   # its reliable resonances" if own else
+             "# fn_hz: none reliable in this file; the modes of [damping] fn_hz are searched"),
+            *opts_line(t),
+            "",
+        ]
+    for k, t in enumerate(([decay] if decay else []) + more_decays):
+        lines += [
+            ("[measurements.decay]    # free decay (no force channel)" if k == 0 else
+             f"[measurements.decay_{k + 1}]   # another free decay"),
+            *([] if k == 0 else ['kind = "decay"']),
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"channel = {_toml(t['channel'])}",
+            *opts_line(t),
             "",
         ]
     fn = (impact or {}).get("fn_hz") or []
-    if impact and fn:
+    pairing: list[dict] = []
+    pair_note = ""
+    mesh_hint: list[str] = []
+    if impact and len(fn) >= 2:
         lines += [
             "[damping]",
             f"fn_hz = {_fmt_list(fn)}   # resonances the default half-power estimator "
-            "found reliable",
+            "(mvtk damping) found reliable",
             "",
         ]
+    elif impact:
+        lines += [f"# [damping] not written: the default half-power estimator found "
+                  f"{len(fn)} reliable resonance(s) in {_rel(impact['file'], folder)}; the "
+                  "stage needs two (run `mvtk damping` on the file to see why)", ""]
+    if impact and fn:
+        shaped = bool(modal or roving)
+        if is_toml:
+            from ._config import CHECK_KEYS
+
+            rows, pair_note, mesh_hint = _pair_with_model(
+                s_path, fn, float(CHECK_KEYS["updated_fn_rel"]))
+            pairing = [] if shaped else rows
         material = _first_material(s_path)
-        updating = [
-            "[updating]",
-            f"targets_hz = {_fmt_list(fn)}   # EDIT: keep the modes the model should match",
-            "",
+        updating = ["[updating]", ""]
+        if pair_note:
+            updating.insert(1, f"# {pair_note}")
+        if mesh_hint:
+            updating[1:1] = [f"# {x}" for x in mesh_hint]
+        if pairing:
+            updating += ["# Each measured resonance paired one-to-one with the FE mode of the "
+                         "structure nearest in", "# frequency (a mode the sensor missed "
+                         "does not shift the others):",
+                         "#   measured (Hz)   FE mode   FE (Hz)   difference (%)"]
+            updating += [f"#   {r['fn_hz']:13.6g}   {r['fe_mode']:7d}   {r['fe_fn_hz']:8.6g}"
+                         f"   {r['df_pct']:+.3g}" for r in pairing]
+            updating.append("")
+        for i, f in enumerate(fn):
+            updating += ["[[updating.targets]]   # EDIT: keep the modes the model should "
+                         "match" if i == 0 else "[[updating.targets]]",
+                         f"fn_hz = {f:.6g}"]
+            row = next((r for r in pairing if r["fn_hz"] == f), None)
+            if row is not None:
+                updating.append(f"mode = {row['fe_mode']}   # FE mode paired by frequency")
+            elif shaped:
+                updating.append("# mode: paired by MAC with the multi-point test's shape "
+                                "when the study runs")
+            else:
+                updating.append("# mode: paired by frequency on the nominal model when the "
+                                "study runs")
+            updating.append(f"label = {_toml(f'f{i + 1}')}")
+            updating.append("")
+        updating += [
             "[[updating.parameters]]   # EDIT: the uncertain parameters of your model",
-            f'path = "materials.{material[0] if material else "steel"}.E"',
+            f"path = {_toml('materials.' + (material[0] if material else 'steel') + '.E')}",
         ]
         if material:
             e = material[1]
@@ -364,7 +467,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     if modal:
         lines += [
             "[modal]                 # multi-point FRF set (mvtk.modal)",
-            f'file = "{_rel(modal["file"], folder)}"',
+            f"file = {_toml(_rel(modal['file'], folder))}",
             f"fmin_hz = {modal['fmin']:.6g}",
             f"fmax_hz = {modal['fmax']:.6g}",
             *opts_line(modal),
@@ -376,21 +479,33 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
     if roving:
         lo = max(max(t["band_hz"][0] for t in roving), 0.0)
         hi = 0.95 * min(t["band_hz"][1] for t in roving)
-        sets = ", ".join(f'"{_rel(t["file"], folder)}"' for t in roving)
+        # the band from the data: around the reliable resonances any set showed (a
+        # mode on a nodal line of one hammer point is seen at another), inside the
+        # excited band
+        peaks = sorted({f for t in roving for f in (t.get("fn_hz") or [])})
+        band_note = "excited band of the sets (no reliable resonance found)"
+        if peaks:
+            lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
+            band_note = (f"0.7 x the lowest and 1.2 x the highest of the reliable "
+                         f"resonances of the sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
+        sets = _toml([_rel(t["file"], folder) for t in roving])
         kind = ("roving hammer" if len({t["nodes"][0] for t in roving}) > 1
                 else "roving sensor")
         lines += [
             f"[modal]                 # {kind} test: {len(roving)} sets with node numbers "
             "(mvtk.modal)",
-            f"sets = [{sets}]",
-            f"fmin_hz = {max(lo, 0.02 * hi):.6g}",
-            f"fmax_hz = {hi:.6g}   # EDIT: the band of your modes",
+            f"sets = {sets}",
+            f"fmin_hz = {max(lo, 0.02 * hi):.6g}   # {band_note}",
+            f"fmax_hz = {hi:.6g}",
 *geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
                            "needed to correlate with the FE model"),
             *opts_line(*roving),
             "",
         ]
     write_text(study_path, "\n".join(lines))
+    log = [f"{t['file']}: {w}" for t in tests for w in t.get("warnings", [])]
+    if log:
+        write_text(folder / "init.log", "\n".join(log) + "\n")
     try:
         load_study(study_path)
     except ConfigError as err:
@@ -398,7 +513,87 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
                           "Edit it (or the structure file) and run `mvtk run` again.") from err
     out_dir = folder / "report"
     return InitResult(study_path, s_path, tests,
-                      f"mvtk run {study_path.as_posix()} --out {out_dir.as_posix()}")
+                      f"mvtk run {study_path.as_posix()} --out {out_dir.as_posix()}",
+                      pairing, mesh_hint)
+
+
+def _refined(desc: dict) -> dict | None:
+    """``desc`` with its generated mesh refined twice in each direction (None: an
+    imported mesh or deck, which ``mvtk init`` cannot refine)."""
+    import copy
+
+    st = desc.get("structure") or {}
+    mesh = desc.get("mesh") or {}
+    if st.get("type", "plate") not in ("plate", "beam") or "file" in mesh:
+        return None
+    out = copy.deepcopy(desc)
+    m = out.setdefault("mesh", {})
+    if "element_size" in m:
+        m["element_size"] = 0.5 * float(m["element_size"])
+    elif st.get("type") == "beam":
+        key = "n_elements" if "n_elements" in m else "nx" if "nx" in m else "n_elements"
+        m[key] = 2 * int(m.get(key, 40))
+    elif "nx" in m or "ny" in m:
+        for k in ("nx", "ny"):
+            if k in m:
+                m[k] = 2 * int(m[k])
+    else:
+        return None
+    return out
+
+
+def _pair_with_model(structure: Path, fn_hz: list[float], tol: float
+                     ) -> tuple[list[dict], str, list[str]]:
+    """Pair measured resonances with the FE modes of ``structure`` by frequency.
+
+    Returns ``(rows, note, mesh_hint)``: one row per paired resonance (``fn_hz``,
+    ``fe_mode`` 1-based among the elastic modes, ``fe_fn_hz``, ``df_pct``, and
+    ``fe_fn_refined_hz``, ``refined_change_pct`` on a mesh refined twice), or no rows
+    and a note saying why the model could not be solved (the pairing is then done when
+    the study runs); ``mesh_hint`` holds the lines of a mesh-convergence hint when the
+    refined mesh changes a paired mode by more than ``tol`` (relative).
+    """
+    from ..fe import build_model, load_structure
+    from ..updating import pair_by_frequency
+    from ._stages import nominal_modes
+
+    try:
+        desc = load_structure(structure)
+        model = build_model(desc)
+        modes = nominal_modes(model, 1.3 * max(fn_hz), n_min=len(fn_hz) + 4)
+    except MvtkError as err:
+        return [], (f"the structure could not be solved ({err}): the targets are paired by "
+                    "frequency when the study runs"), []
+    f = np.asarray(modes.fn_hz, dtype=float)
+    elastic = f[f >= 0.01 * min(fn_hz)]
+    got = pair_by_frequency(fn_hz, elastic)
+    rows = [{"fn_hz": float(fm), "fe_mode": int(m) + 1, "fe_fn_hz": float(elastic[m]),
+             "df_pct": 100.0 * (elastic[m] / fm - 1.0)}
+            for fm, m in zip(fn_hz, got) if m >= 0]
+    hint: list[str] = []
+    fine = _refined(desc)
+    if fine is not None and rows and model.n_dof < 60000:
+        try:
+            fm_ = np.asarray(nominal_modes(build_model(fine), 1.3 * max(fn_hz),
+                                           n_min=len(elastic) + 2).fn_hz, dtype=float)
+        except MvtkError:
+            fm_ = np.zeros(0)
+        fe_fine = fm_[fm_ >= 0.01 * min(fn_hz)]
+        for r in rows:
+            k = r["fe_mode"] - 1
+            if k < fe_fine.size:
+                r["fe_fn_refined_hz"] = float(fe_fine[k])
+                r["refined_change_pct"] = 100.0 * (fe_fine[k] / r["fe_fn_hz"] - 1.0)
+        worst = [r for r in rows if abs(r.get("refined_change_pct", 0.0)) > 100 * tol]
+        if worst:
+            hint = [f"MESH: a mesh refined twice in each direction changes the paired FE "
+                    f"mode(s) by more than the target tolerance ({100 * tol:g} %):"]
+            hint += [f"  FE mode {r['fe_mode']}: {r['fe_fn_hz']:.6g} Hz -> "
+                     f"{r['fe_fn_refined_hz']:.6g} Hz ({r['refined_change_pct']:+.2g} %)"
+                     for r in worst]
+            hint.append("EDIT the structure's [mesh] (finer) before updating: otherwise the "
+                        "update compensates the discretisation error with the parameters")
+    return rows, "", hint
 
 
 def _first_material(structure: Path) -> tuple[str, float] | None:
@@ -481,13 +676,13 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
             f"# Structure written by `mvtk init` around the Nastran deck {mesh.name}: nodes,",
             "# elements, properties, materials and SPCs all come from the deck. Check it with",
             "# `mvtk modes structure.toml -n 6`.",
-            f'name = "{mesh.stem} (Nastran deck)"',
+            f"name = {_toml(mesh.stem + ' (Nastran deck)')}",
             "",
             "[structure]",
             'type = "mesh"',
             "",
             "[mesh]",
-            f'file = "{rel}"',
+            f"file = {_toml(rel)}",
             "# spc_id = 1             # EDIT: the SPC set to apply (default: all SPCs)",
             ""])
     try:
@@ -524,7 +719,7 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
         "# EDIT the material, the section of each element set and the supports (SI units),",
         "# then check it with `mvtk modes structure.toml -n 6`. Reference: docs, 'Structure",
         "# TOML'.",
-        f'name = "{mesh.stem} (imported mesh)"',
+        f"name = {_toml(mesh.stem + ' (imported mesh)')}",
         "",
         "[materials.steel]        # EDIT: your material",
         "E = 210e9",
@@ -535,7 +730,7 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
         'type = "mesh"',
         "",
         "[mesh]",
-        f'file = "{rel}"',
+        f"file = {_toml(rel)}",
         "# element set (physical group) -> section; sets not listed are left out of the model",
         "sections = { " + ", ".join(f'{_toml_key(n)} = "{shell_sec[n]}"' for n in shells)
         + " }",

@@ -38,33 +38,50 @@ def study_checks(res: StudyResult) -> list[Check]:
     tol = res.study.config["checks"]
     src = _ref(res, "source", "references")
     checks: list[Check] = []
-    targets = res.study.config.get("updating", {}).get("targets_hz") or _ref(
-        res, "experiment_fn_hz", [])
+    # the independent checks of each damping estimate (half-power row i, or
+    # ("decay", name)): an estimate its estimator flagged is only accepted when one passes
+    confirm: dict = {}
+    targets = _target_frequencies(res)
     dmp = res.results.get("damping", {})
     hp = dmp.get("half_power")
     if hp and targets:
+        # each identified mode is checked against the target of the same mode (paired by
+        # frequency from the modes the damping stage was asked for), never by position
+        groups = _rows_by_test(dmp, hp)
+        zref = _ref(res, "zeta", [])
+        ref_f = (_ref(res, "experiment_fn_hz", []) or [])[: len(zref)]
+        to_target, to_zref = {}, {}
+        for rows, guess in groups:   # one-to-one within each test
+            to_target.update({rows[i]: j for i, j in _pair(guess, targets).items()})
+            if zref:
+                to_zref.update({rows[i]: j for i, j in _pair(guess, ref_f).items()})
         for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
-            if i < len(targets):
-                checks.append(Check(f"identified f{i + 1} (half-power peak)", fn, targets[i],
-                                    tol["identified_fn_rel"], "Hz", source="study targets"))
-            zref = _ref(res, "zeta", [])
-            if i < len(zref):
-                checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[i],
+            if i in to_target:
+                checks.append(Check(f"identified f{i + 1} (half-power peak)", fn,
+                                    targets[to_target[i]], tol["identified_fn_rel"], "Hz",
+                                    source="study targets"))
+            j = to_zref.get(i, i if not _ref(res, "experiment_fn_hz") else None)
+            if j is not None and j < len(zref):
+                checks.append(Check(f"identified zeta{i + 1} (half-power)", z, zref[j],
                                     tol["identified_zeta_rel"], "", source=src))
+                confirm.setdefault(i, []).append(checks[-1])
     truth_pair = _truth_rayleigh(res)
     if hp and truth_pair:
         for i, (fn, z) in enumerate(zip(hp["fn_hz"], hp["zeta"])):
-            if i >= len(_ref(res, "zeta", [])) and np.isfinite([fn, z]).all():
+            if i not in confirm and np.isfinite([fn, z]).all():
                 w = 2 * np.pi * fn
                 checks.append(Check(f"identified zeta{i + 1} at {fn:.1f} Hz vs SYNTHETIC truth",
                                     z, truth_pair[0] / (2 * w) + truth_pair[1] * w / 2,
                                     tol["identified_zeta_rel"], "",
                                     source="data/make_smart_beam_data.py"))
+                confirm.setdefault(i, []).append(checks[-1])
     env = dmp.get("envelope")
     zref = _ref(res, "zeta", [])
     if env and zref:
         checks.append(Check("identified zeta1 (envelope fit of the free decay)",
                             env["zeta"][0], zref[0], tol["identified_zeta_rel"], "", source=src))
+        confirm.setdefault(("decay", next(iter(dmp.get("decays") or {"decay": 0}))),
+                           []).append(checks[-1])
     rh = dmp.get("rayleigh_half_power")
     if rh and _ref(res, "half_power_alpha") is not None:
         checks.append(Check("Rayleigh alpha (half-power)", rh["alpha"],
@@ -73,7 +90,16 @@ def study_checks(res: StudyResult) -> list[Check]:
         checks.append(Check("Rayleigh beta (half-power)", rh["beta"],
                             _ref(res, "half_power_beta"), tol["rayleigh_rel"], "s", source=src))
     checks += _correlation_checks(res, tol)
+    checks += _consistency_checks(res, tol, confirm)
+    checks += _flagged_estimates(res, confirm)
     up = res.results.get("updating")
+    if up and "identifiable_study" in up:
+        checks.append(Check(
+            "updated parameters identifiable from the targets"
+            + (f" (not: {up['not_identifiable_why']}; the data determine "
+               f"{up['identifiable_combination']})" if not up["identifiable_study"] else ""),
+            1.0 if up["identifiable_study"] else 0.0, 1.0, 0.0, "", kind="lower",
+            source="log-sensitivity condition number and bounds"))
     if up:
         for i, (f, ft) in enumerate(zip(up["fn_hz"], up["targets_hz"])):
             checks.append(Check(f"updated FE f{i + 1}", f, ft, tol["updated_fn_rel"], "Hz",
@@ -142,6 +168,175 @@ def study_checks(res: StudyResult) -> list[Check]:
                                     tol["closed_loop_zeta_min"], 0.0, "", kind="lower",
                                     source="study tolerance"))
     return checks
+
+
+def _target_frequencies(res: StudyResult) -> list[float]:
+    """The updating targets (Hz) in either form, else the reference experiment."""
+    up = res.study.config.get("updating") or {}
+    if up.get("targets_hz"):
+        return [float(f) for f in up["targets_hz"]]
+    if up.get("targets"):
+        return [float(t["fn_hz"]) for t in up["targets"]]
+    return [float(f) for f in _ref(res, "experiment_fn_hz", []) or []]
+
+
+def _pair(a_hz, b_hz, max_rel: float = 0.1) -> dict[int, int]:
+    """One-to-one pairs ``i -> j`` of two frequency lists by frequency (within max_rel)."""
+    from ..updating import pair_by_frequency
+
+    if not len(a_hz) or not len(b_hz):
+        return {}
+    got = pair_by_frequency(a_hz, b_hz, max_rel=max_rel)
+    return {i: int(j) for i, j in enumerate(got) if j >= 0}
+
+
+def _rows_by_test(dmp: dict, hp: dict) -> list[tuple[list[int], list[float]]]:
+    """(row indices, searched frequencies) of each impact test of the damping table."""
+    tests = list(hp.get("test", ["impact"] * len(hp["fn_hz"])))
+    by = dmp.get("fn_guess_by_test")
+    if not by:
+        by = {"impact": list(dmp.get("fn_guess_hz", [])),
+              "broadband": list(dmp.get("broadband_fn_guess_hz", []))}
+    out = []
+    for name in dict.fromkeys(tests):
+        rows = [i for i, t in enumerate(tests) if t == name]
+        guess = list(by.get(name) or [])
+        if len(guess) != len(rows):
+            guess = [hp["fn_hz"][i] for i in rows]
+        out.append((rows, guess))
+    return out
+
+
+def _flagged_estimates(res: StudyResult, confirm: dict) -> list[Check]:
+    """A damping estimate its estimator did not mark reliable (too few lines, a close
+    mode, noise, NaN: the warnings of the damping stage) counts in the verdict: it
+    passes only when an independent value confirms it (a reference, the SYNTHETIC
+    truth, another test or a decay of the same mode, within their tolerances)."""
+    d = res.results.get("damping", {})
+    hp = d.get("half_power") or {}
+    out = []
+    tests = list(hp.get("test", ["impact"] * len(hp.get("fn_hz", []))))
+    items = [(i, f"damping of mode {i + 1} ({hp['fn_hz'][i]:.4g} Hz, test {tests[i]}, "
+                 "half-power)", hp["zeta"][i], bool(hp.get("reliable", [True] * (i + 1))[i]),
+              str((hp.get("reason") or [""] * (i + 1))[i] or hp.get("quality", [""])[i]))
+             for i in range(len(hp.get("fn_hz", [])))]
+    for name, dec in (d.get("decays") or {}).items():
+        env = dec.get("envelope") or {}
+        if env.get("zeta"):
+            items.append((("decay", name), f"damping of the decay {name} (envelope fit)",
+                          env["zeta"][0], bool((env.get("reliable") or [True])[0]),
+                          str((env.get("reason") or [""])[0])))
+    for key, label, z, reliable, why in items:
+        finite = z is not None and np.isfinite(z)
+        if reliable and finite:
+            continue
+        ok = finite and any(c.passed for c in confirm.get(key, []))
+        why = why if finite else "no estimate (NaN)"
+        out.append(Check(f"{label}: flagged by its estimator ({why})"
+                         + ("; confirmed by an independent value" if ok
+                            else "; no independent value confirms it"),
+                         1.0 if ok else 0.0, 1.0, 0.0, "", kind="lower",
+                         source="estimator verdict and the checks above"))
+    up = res.results.get("updating")
+    if up and "success" in up:
+        out.append(Check("updating converged" + ("" if up["success"] else
+                                                 f" (not: {up.get('message', '')})"),
+                         1.0 if up["success"] else 0.0, 1.0, 0.0, "", kind="lower",
+                         source="mvtk.updating.update"))
+    return out
+
+
+def _repeat_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Check]:
+    """The same mode measured twice: by two impact tests, or by a decay and a hammer
+    test. Each later estimate is compared with the first (``zeta_consistency_rel``)."""
+    d = res.results.get("damping", {})
+    hp = d.get("half_power")
+    out: list[Check] = []
+    if not hp:
+        return out
+    f = np.asarray(hp["fn_hz"], dtype=float)
+    tests = list(hp.get("test", ["impact"] * f.size))
+    for i in range(f.size):
+        if not np.isfinite(f[i]):
+            continue
+        prev = [j for j in range(i) if np.isfinite(f[j]) and abs(f[j] / f[i] - 1) <= 0.02]
+        if prev and tests[prev[0]] != tests[i]:
+            j = prev[0]
+            out.append(Check(f"zeta at {f[i]:.1f} Hz: test {tests[i]} vs test {tests[j]} "
+                             "(half-power)", hp["zeta"][i], hp["zeta"][j],
+                             tol["zeta_consistency_rel"], "", source="same mode, two tests"))
+            confirm.setdefault(i, []).append(out[-1])
+            confirm.setdefault(j, []).append(out[-1])
+    for name, dec in (d.get("decays") or {}).items():
+        env = dec.get("envelope") or {}
+        for fe, ze in zip(env.get("fn_hz", []), env.get("zeta", [])):
+            if not np.isfinite(fe) or not f.size:
+                continue
+            j = int(np.nanargmin(np.abs(f / fe - 1)))
+            if abs(f[j] / fe - 1) <= 0.02:
+                out.append(Check(f"zeta at {fe:.1f} Hz: decay {name} (envelope fit) vs "
+                                 f"test {tests[j]} (half-power)", ze, hp["zeta"][j],
+                                 tol["zeta_consistency_rel"], "",
+                                 source="same mode, two methods"))
+                confirm.setdefault(j, []).append(out[-1])
+                confirm.setdefault(("decay", name), []).append(out[-1])
+    return out
+
+
+def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Check]:
+    """The same quantity from two sections: damping (half-power vs multi-point
+    identification), and the quality (MPC, MPD) of the multi-point shapes the study uses.
+
+    A multi-point damping ratio is compared only where the test's line spacing resolves
+    it (at least 5 lines across its half-power band 2 zeta f, the half-power estimator's
+    ``min_lines``); where it does not, the leakage of the short records can only widen
+    the peak, so the check is that it is not *below* the half-power value (an upper bound
+    of the damping), and its name says so.
+    """
+    out: list[Check] = _repeat_checks(res, tol, confirm)
+    mod = res.results.get("modal")
+    hp = res.results.get("damping", {}).get("half_power")
+    if mod and hp:
+        t = mod["table"]
+        lines = _modal_df_hz(res)
+        pairs = _pair(hp["fn_hz"], t["fn_hz"], max_rel=0.02)
+        for i, j in pairs.items():
+            z_hp, z_m, f = hp["zeta"][i], t["zeta"][j], t["fn_hz"][j]
+            n_lines = 2 * z_m * f / lines if lines else float("nan")
+            label = (f"zeta of mode {i + 1} ({f:.1f} Hz): multi-point test vs half-power")
+            if np.isfinite(n_lines) and n_lines < 5:
+                out.append(Check(label + f" (multi-point band {n_lines:.1f} lines of "
+                                 f"{lines:g} Hz: leakage-limited, an upper bound)",
+                                 z_m, z_hp, 0.0, "", kind="lower",
+                                 source="consistency between sections"))
+            else:
+                out.append(Check(label, z_m, z_hp, tol["zeta_consistency_rel"], "",
+                                 source="consistency between sections"))
+    up = res.results.get("updating")
+    if mod and up:
+        used = {int(k) for k in up.get("target_test_modes") or [] if k is not None}
+        t = mod["table"]
+        for m, mpc, mpd in zip(t["mode"], t["mpc"], t["mpd"]):
+            if int(m) in used:
+                out.append(Check(f"MPC of test mode {int(m)} (shape used to pair a target)",
+                                 float(mpc), float(tol["mpc_min"]), 0.0, "", kind="lower",
+                                 source="normal-mode shape"))
+                out.append(Check(f"MPD of test mode {int(m)} (shape used to pair a target)",
+                                 float(mpd), float(tol["mpd_max_deg"]), 0.0, "deg",
+                                 kind="upper", source="normal-mode shape"))
+    return out
+
+
+def _modal_df_hz(res: StudyResult) -> float:
+    """Line spacing (Hz) of the multi-point FRFs (0 when unknown)."""
+    mod = res.results.get("modal") or {}
+    if mod.get("df_hz"):
+        return float(mod["df_hz"])
+    arr = res.arrays.get("modal")
+    if arr is not None and "frequency" in arr.coords and arr.sizes.get("frequency", 0) > 1:
+        f = arr["frequency"].values
+        return float(f[1] - f[0])
+    return 0.0
 
 
 def _correlation_checks(res: StudyResult, tol: dict) -> list[Check]:
@@ -276,6 +471,32 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
             "cumulative": np.cumsum(pair["mass_fraction"])}),
             "chowdhury_pairing", "Identified modes paired with FE modes (effective mass)",
             passed_column=None)
+    sett = d.get("half_power_settings") or {}
+    files = {k: p.name for k, p in res.study.measurement_files.items()}
+    if sett:
+        parts = []
+        for name, st in sett.items():
+            rec = (f"{st['frf_nperseg']} samples per record"
+                   if st.get("frf_nperseg") is not None else "record chosen from the data")
+            pad = (f", FFT length {st['frf_nfft']}" if st.get("frf_nfft") not in
+                   (None, st.get("frf_nperseg")) else "")
+            parts.append(f"{name} ({files.get(name, '')}): {st.get('variant')} variant, "
+                         f"{rec}{pad}; the same table: `mvtk damping {files.get(name, 'FILE')}"
+                         f" {st.get('command_options', '')}`")
+        sec.text("Half-power estimates by mvtk.damping.estimate, the estimator of `mvtk "
+                 "damping`, with its defaults unless the study sets them: "
+                 + "; ".join(parts) + ".")
+    decays = d.get("decays") or {}
+    if len(decays) > 1:
+        sec.table(pd.DataFrame([
+            {"test": name, "channel": dec["channel"],
+             "fn_hz (envelope)": (dec["envelope"].get("fn_hz") or [np.nan])[0],
+             "zeta envelope fit": (dec["envelope"].get("zeta") or [np.nan])[0],
+             "zeta log decrement": (dec["log_decrement"].get("zeta") or [np.nan])[0],
+             "reliable": (dec["envelope"].get("reliable") or [None])[0]}
+            for name, dec in decays.items()]), "damping_decays",
+            "Free decays (envelope fit and logarithmic decrement of each)",
+            passed_column=None)
     md = d.get("model_damping")
     if md:
         sec.text(f"Rayleigh pair used for the SE and the controllers: {md['method']} "
@@ -346,7 +567,7 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         if updated is not None and len(updated) == len(order):
             updated = [updated[i] for i in order]
         cols["experiment"] = targets
-    cols["FE nominal"] = fe["fn_hz"][: len(targets) if targets else None]
+    cols["FE nominal"] = _nominal_by_pairing(fe, up, targets)
     if up:
         cols["FE updated"] = updated
     if _ref(res, "fe_fn_hz"):
@@ -393,6 +614,28 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.figure(partial(plot_mode_shapes, arr["nodes"].values, arr["uz"].values[:, :k],
                                     fe["fn_hz"][:k]),
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
+
+
+def _nominal_by_pairing(fe: dict, up: dict | None, targets) -> list:
+    """Nominal FE frequency of the mode paired with each target (in target order).
+
+    The pairing is the updating's (by MAC, or by frequency on the nominal model); its
+    mode numbers count elastic modes, so rigid-body modes of the nominal table are
+    skipped. Without an updating the targets are paired by frequency. NaN where the
+    paired mode is beyond the modes the FE stage tabulated.
+    """
+    f = np.asarray(fe["fn_hz"], dtype=float)
+    if not targets:
+        return list(f)
+    if up and up.get("modes") is not None and len(up["modes"]) == len(targets):
+        t_up = np.asarray(up["targets_hz"], dtype=float)
+        order = np.argsort(t_up, kind="stable")
+        elastic = f[f >= 0.01 * float(np.min(t_up))]
+        modes = [int(up["modes"][i]) for i in order]
+        return [float(elastic[m - 1]) if 0 < m <= elastic.size else float("nan")
+                for m in modes]
+    pairs = _pair(list(targets), list(f), max_rel=1.0)
+    return [float(f[pairs[i]]) if i in pairs else float("nan") for i in range(len(targets))]
 
 
 def _mc_paths(u: dict) -> str:

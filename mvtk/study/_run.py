@@ -242,6 +242,17 @@ def run(
         ``lock_timeout_s`` elapsed while another run held the folder.
     """
     study = study_path if isinstance(study_path, Study) else load_study(study_path)
+    from ._init import PLACEHOLDER_MARK, placeholder_structure
+
+    wanted = stages_for(study.config, STAGE_NEEDS if stages is None else stages)
+    needs_fe = stages is None or any(s not in ("ingest", "modal") for s in wanted)
+    if (needs_fe and study.structure_file is not None
+            and placeholder_structure(study.structure_file)):
+        raise ConfigError(
+            f"{study.structure_file}: this is the placeholder structure `mvtk init` wrote "
+            f"(line {PLACEHOLDER_MARK!r}); edit it to your structure (geometry, materials, "
+            "layers, mesh, supports) and delete that line, or give your own with "
+            "`mvtk init --structure FILE`")
     out = check_output_dir(out_dir)
     with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait) as lock:
         return _run_locked(study, out, use_cache=use_cache, progress=progress,
@@ -498,7 +509,7 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
         if "fe" not in background:
             do("fe", st.fe_nominal)
         do("modal", _ema.modal)
-        do("updating", lambda s: st.updating(s, arrays.get("modal")))
+        do("updating", lambda s: st.updating(s, arrays.get("modal"), results.get("modal")))
         if "fe" in background:
             do("fe", st.fe_nominal)
 

@@ -157,9 +157,15 @@ _IMPACT = Table(
                  "study file.", REQUIRED),
      "reference": Key("str", "Force channel name.", REQUIRED),
      "response": Key("str", "Response channel name.", REQUIRED),
-     "record_s": _pos("Length of one record (one hit).", units="s"),
-     "force_window_s": _pos("Force window length after the hit (None: no window).",
-                            None, "s"),
+     "record_s": _pos("Length of one record (one hit); None: chosen from the data "
+                      "(the time between hits, zero-padded when the response has decayed), "
+                      "as `mvtk damping` does.", None, units="s"),
+     "force_window_s": _pos("Force window length after the hit (None: 4 x the measured "
+                            "pulse width, as `mvtk damping` does).", None, "s"),
+     "kind": Key("str", "Kind of the test: needed for a measurement named other than "
+                 "impact/broadband/decay.", "impact", choices=("impact",)),
+     "fn_hz": _freqs("Approximate resonances searched in this record (None: damping.fn_hz; "
+                     "damping.broadband_fn_hz for 'broadband').", None),
      "read_options": _read_options()},
 )
 
@@ -170,6 +176,10 @@ _DECAY = Table(
      "band_hz": Key("numbers", "Band-pass [f_low, f_high] around mode 1 before the fits "
                     "(None: no filter).", None, "Hz", minimum=0.0, exclusive_minimum=True,
                     ascending=True, length=2),
+     "kind": Key("str", "Kind of the test: needed for a measurement named other than "
+                 "impact/broadband/decay.", "decay", choices=("decay",)),
+     "fn_hz": _pos("Approximate frequency of the decaying mode (None: the first of "
+                   "damping.fn_hz).", None, "Hz"),
      "read_options": _read_options()},
 )
 
@@ -257,6 +267,12 @@ _CHECK_DOC = {
     "closed_loop_zeta_min": ("minimum closed-loop damping ratio of mode 1 of every linear "
                              "controller", 0.005, ""),
     "truth_param_rel": ("updated parameters vs the SYNTHETIC truth", 0.05, ""),
+    "zeta_consistency_rel": ("damping of one mode from two methods (half-power vs the "
+                             "multi-point identification) where both resolve it", 0.30, ""),
+    "mpc_min": ("minimum modal phase collinearity of each multi-point mode whose shape "
+                "the study uses", 0.9, ""),
+    "mpd_max_deg": ("maximum mean phase deviation of each multi-point mode whose shape the "
+                    "study uses", 15.0, "deg"),
     "uncertainty_cov_rel": ("Monte-Carlo CoV(f1) vs its first-order estimate", 0.20, ""),
     "mac_min": ("minimum MAC of each multi-point test mode with its paired updated-FE mode",
                 0.9, ""),
@@ -275,7 +291,14 @@ SCHEMA: dict[str, Table] = {
         "'file', the structure tables (materials, structure, patches, mesh, boundary, "
         "points, name) written inline at the top level of the study file.",
         {"file": Key("path", "Structure TOML, relative to the study file.", None)}),
-    "measurements": Table("The measured tests (each optional).", {
+    "measurements": Table(
+        "The measured tests, any number, each a named table: [measurements.impact], "
+        "[measurements.broadband] and [measurements.decay] have their kind by name; any "
+        "other name, e.g. [measurements.hit_2] or [measurements.decay_tip], says kind = "
+        "\"impact\" or \"decay\" and takes the keys of that kind. Every impact test gives "
+        "a half-power estimate of the modes it searches (its fn_hz), every decay an "
+        "envelope and log-decrement estimate of its mode; the same mode from two tests is "
+        "a consistency check of the report.", {
         "impact": Key("table", "Long impact test (fine frequency resolution).", None,
                       table=_IMPACT),
         "broadband": Key("table", "Short broadband impact test for the higher modes "
@@ -322,8 +345,9 @@ SCHEMA: dict[str, Table] = {
         "fn_hz": _freqs("Approximate resonances searched in the impact test, ascending."),
         "broadband_fn_hz": _freqs("Resonances searched in the broadband test, ascending "
                                   "and above fn_hz.", []),
-        "half_power_method": Key("str", "Half-power estimator (mvtk.damping.half_power).",
-                                 "interpolate", choices=("interpolate", "fit")),
+        "half_power_method": Key("str", "Half-power variant (mvtk.damping.half_power; "
+                                 "the default is that of `mvtk damping`).",
+                                 "fit", choices=("fit", "interpolate")),
         "chowdhury_target_mass": Key("number", "Effective-mass fraction of the upper "
                                      "Chowdhury anchor.", 0.95, minimum=0.0, maximum=1.0,
                                      exclusive_minimum=True),
@@ -335,7 +359,14 @@ SCHEMA: dict[str, Table] = {
     }),
     "updating": Table(
         "Sensitivity-based updating (mvtk.updating.update): give targets_hz or targets.",
-        {"targets_hz": _freqs("Measured natural frequencies, ascending (mode order).", None),
+        {"targets_hz": _freqs("Measured natural frequencies, ascending. Each is paired "
+                              "one-to-one with the nominal FE mode nearest in frequency "
+                              "(or by MAC with a multi-point test), not by order; "
+                              "[[updating.targets]] with 'mode' fixes the pairing.", None),
+         "identifiability_cond_max": _pos(
+             "Largest condition number of the log-sensitivities d ln f / d ln p for which "
+             "the update is reported identifiable (a 1 % frequency error then moves the "
+             "weakest parameter combination by at most about this many %).", 100.0),
          "targets": Key("tables", "Targets as tables (fn_hz, weight, mode, label, shape, "
                         "kind).", None, table=_TARGET, min_length=1),
          "parameters": Key("tables", "Parameters to update ([[updating.parameters]]).",
@@ -596,6 +627,38 @@ def validate_table(d: Mapping, table: Table, where: str, source: str = "") -> di
     return out
 
 
+#: Kind of the measurements named by their kind.
+_MEASUREMENT_KIND = {"impact": "impact", "broadband": "impact", "decay": "decay"}
+
+
+def _validate_measurements(d: Any, source: str) -> dict:
+    """``[measurements]``: any number of named tests, each of kind impact or decay."""
+    loc = f"{source}: " if source else ""
+    if not isinstance(d, Mapping):
+        raise ConfigError(f"{loc}[measurements]: expected a table of named tests, got {d!r}")
+    out = {}
+    for name, m in d.items():
+        where = f"measurements.{name}"
+        if not isinstance(m, Mapping) and str(name) not in _MEASUREMENT_KIND:
+            raise unknown_key_error(name, "measurements", _MEASUREMENT_KIND, source)
+        if not isinstance(m, Mapping):
+            raise ConfigError(f"{loc}[{where}]: expected a table (file, ... of an impact "
+                              f"test or a decay), got {m!r}")
+        kind = m.get("kind", _MEASUREMENT_KIND.get(str(name)))
+        if "kind" not in m and str(name) not in _MEASUREMENT_KIND:
+            err = unknown_key_error(name, "measurements", _MEASUREMENT_KIND, source)
+            raise ConfigError(f"{err}; a measurement of another name says its kind "
+                              "(kind = \"impact\" or \"decay\")")
+        if kind not in ("impact", "decay"):
+            raise ConfigError(
+                f"{loc}[{where}]: expected kind = \"impact\" or \"decay\" (a measurement "
+                "named other than impact, broadband or decay says its kind), got "
+                f"{kind!r}")
+        table = SCHEMA["measurements"].keys["decay" if kind == "decay" else "impact"].table
+        out[name] = validate_table(m, table, where, source)
+    return out
+
+
 def validate(cfg: Mapping, source: str = "", inline_structure: bool = False,
              structure_tables=STRUCTURE_TABLES) -> dict:
     """Validate a parsed study TOML against :data:`SCHEMA`.
@@ -625,7 +688,9 @@ def validate(cfg: Mapping, source: str = "", inline_structure: bool = False,
             raise ConfigError(f"{loc}unknown sections [{name!r}]{_suggest(name, accepted)}; "
                               f"accepted sections: {sorted(accepted)}")
     for name, value in cfg.items():
-        if name in SCHEMA and not (inline_structure and name == "structure"):
+        if name == "measurements":
+            out[name] = _validate_measurements(value, source)
+        elif name in SCHEMA and not (inline_structure and name == "structure"):
             out[name] = validate_table(value, SCHEMA[name], name, source)
         else:
             out[name] = value

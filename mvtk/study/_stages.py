@@ -17,7 +17,7 @@ from ..errors import ConfigError
 from ._config import Study
 
 __all__ = ["ingest", "fe_nominal", "damping", "updating", "uncertainty", "reduction",
-           "control"]
+           "control", "pair_targets", "nominal_modes"]
 
 
 def _warning_messages(caught) -> list[str]:
@@ -37,7 +37,7 @@ def ingest(study: Study):
         ds = mvtk.io.read(path, **dict(meas[test].get("read_options") or {}))
         th = ds["time_history"]
         wanted = ([meas[test]["reference"], meas[test]["response"]]
-                  if test in ("impact", "broadband") else [meas[test]["channel"]])
+                  if meas[test].get("kind") != "decay" else [meas[test]["channel"]])
         names = [str(c) for c in th["channel"].values]
         missing = [w for w in wanted if w not in names]
         if missing:
@@ -108,19 +108,38 @@ def fe_nominal(study: Study):
 
 # ---------------------------------------------------------------------------- damping
 def _impact_half_power(arrays, test: str, m: dict, fn_guess: list[float], method: str):
-    """H1 FRF of an impact test and half-power on it: (FRF dataset, result, warnings)."""
+    """Half-power damping of an impact test with :func:`mvtk.damping.estimate`.
+
+    The same function and defaults as ``mvtk damping FILE``: the record (``record_s``)
+    and the force window are chosen from the data unless the section sets them. Returns
+    ``(FRF dataset, table dict, warnings, settings)``; ``settings`` holds what decided
+    the numbers and the equivalent ``mvtk damping`` options.
+    """
     import mvtk.damping as md
-    import mvtk.signal as ms
 
     th = _time_history(arrays, test)
     fs = 1.0 / float(th["time"].values[1] - th["time"].values[0])
+    nperseg = None if m.get("record_s") is None else int(round(m["record_s"] * fs))
+    fw = m.get("force_window_s")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        fr = ms.frf(th, reference=m["reference"], response=m["response"],
-                    excitation="impact", nperseg=int(round(m["record_s"] * fs)),
-                    force_window_s=m.get("force_window_s"))
-        hp = md.half_power(fr, fn_hz=fn_guess, method=method)
-    return fr, hp, _warning_messages(caught)
+        est = md.estimate(th, method="half_power", variant=method, fn_hz=fn_guess,
+                          reference=m["reference"], channel=[m["response"]],
+                          excitation="impact", nperseg=nperseg,
+                          force_window_s="auto" if fw is None else fw)
+    settings = {k: (v.item() if hasattr(v, "item") else v) for k, v in est.settings.items()
+                if isinstance(v, str | int | float | list | tuple | type(None))
+                or hasattr(v, "item")}
+    opts = [f"--reference {m['reference']}", f"--channel {m['response']}", "--impact",
+            "--method half_power", f"--variant {est.variant}",
+            "--fn " + " ".join(repr(float(f)) for f in fn_guess)]
+    if nperseg is not None:
+        opts.append(f"--nperseg {nperseg}")
+    if fw is not None:
+        opts.append(f"--force-window {float(fw)!r}")
+    settings["command_options"] = " ".join(opts)
+    settings["force_window_given"] = fw is not None
+    return est.frf, est.table.to_dict(orient="list"), _warning_messages(caught), settings
 
 
 def _modes_to_cover(f_top: float, known_fn_hz=None) -> int:
@@ -165,11 +184,26 @@ def _paired_mass_fractions(description: dict, fn_hz: np.ndarray, known_fn_hz=Non
             "fe_fn_hz_all": fe_fn.tolist()}
 
 
-def damping(study: Study, arrays, description: dict, known_fn_hz=None):
-    """Half-power on the impact FRFs, envelope fit on the free decay, Rayleigh fits.
+def _first_of_each_mode(fn_hz: np.ndarray, rel: float = 0.02) -> np.ndarray:
+    """True for each row whose frequency is not within ``rel`` of an earlier row's."""
+    keep = np.ones(fn_hz.size, dtype=bool)
+    for i in range(fn_hz.size):
+        prev = fn_hz[:i][keep[:i] & np.isfinite(fn_hz[:i])]
+        if np.isfinite(fn_hz[i]) and prev.size and np.min(np.abs(prev / fn_hz[i] - 1)) <= rel:
+            keep[i] = False
+    return keep
 
-    Modes ``damping.fn_hz`` come from the long impact test (fine frequency resolution),
-    modes ``damping.broadband_fn_hz`` from the short broadband test. Rayleigh pairs: the
+
+def damping(study: Study, arrays, description: dict, known_fn_hz=None):
+    """Half-power on the impact FRFs, envelope fit on the free decays, Rayleigh fits.
+
+    Every impact-kind measurement gives a half-power estimate (:func:`mvtk.damping.
+    estimate`, the estimator of ``mvtk damping``) of the modes it searches: its own
+    ``fn_hz``, else ``damping.fn_hz`` (``damping.broadband_fn_hz`` for the one named
+    ``broadband``); the one named ``impact`` comes first. Every decay-kind measurement
+    gives an envelope fit and a logarithmic decrement of its mode (``fn_hz``, else the
+    first of ``damping.fn_hz``); the first decay is the one of the paper's Table 3. The
+    Rayleigh fits use each mode once (its first estimate). Rayleigh pairs: the
     paper's two-mode fit of modes 1 and 2 ("half-power"), the least-squares fit over all
     identified modes, and the Chowdhury pair (anchors by the effective mass of the FE
     modes of ``description`` paired with the identified ones by frequency).
@@ -184,32 +218,55 @@ def damping(study: Study, arrays, description: dict, known_fn_hz=None):
     meas = study.section("measurements") or {}
     fn_guess = [float(f) for f in cfg["fn_hz"]]
     bb_guess = [float(f) for f in cfg.get("broadband_fn_hz", [])]
-    method = cfg.get("half_power_method", "interpolate")
+    method = cfg.get("half_power_method", "fit")
     result: dict[str, Any] = {"fn_guess_hz": fn_guess, "broadband_fn_guess_hz": bb_guess}
     out = {}
     zeta_hp = fn_hp = None
-    if "impact" in meas:
-        fr, hp, warns = _impact_half_power(arrays, "impact", meas["impact"], fn_guess, method)
-        hp_d = hp.to_dataframe().to_dict(orient="list")
-        hp_d["test"] = ["impact"] * len(fn_guess)
-        result["half_power_warnings"] = warns
-        if bb_guess and "broadband" in meas:
-            fr_bb, hp_bb, warns = _impact_half_power(arrays, "broadband",
-                                                     meas["broadband"], bb_guess, method)
-            d_bb = hp_bb.to_dataframe().to_dict(orient="list")
-            for k in hp_d:
-                hp_d[k] = list(hp_d[k]) + (list(d_bb[k]) if k in d_bb
-                                           else ["broadband"] * len(bb_guess))
-            result["half_power_warnings"] += [f"broadband test: {w}" for w in warns]
-            H = fr_bb["frf"].isel(response=0, reference=0)
-            out["frequency_bb"] = fr_bb["frequency"].values
-            out["frf_abs_bb"] = (("frequency_bb",), np.abs(H.values))
+    # every impact-kind test, the one named "impact" first (the long record of the
+    # paper's Table 3), the others in the order of the file
+    # the test names (not the whole table: a path written otherwise must not change the
+    # cache key), in the order of the file
+    names = list(study.measurement_files)
+    impacts = sorted((n for n in names if meas[n]["kind"] == "impact"),
+                     key=lambda n: n != "impact")
+    runs = []
+    for name in impacts:
+        m = meas[name]
+        guess = m.get("fn_hz") or (bb_guess if name == "broadband" else fn_guess)
+        if guess:
+            runs.append((name, [float(f) for f in guess]))
+    if runs:
+        result["half_power_settings"] = {}
+        result["half_power_warnings"] = []
+        result["fn_guess_by_test"] = {n: g for n, g in runs}
+        hp_d = None
+        for k, (name, guess) in enumerate(runs):
+            fr_k, d_k, warns, sett = _impact_half_power(arrays, name, meas[name], guess,
+                                                        method)
+            result["half_power_settings"][name] = sett
+            d_k["test"] = [name] * len(guess)
+            if k == 0:
+                fr, hp_d = fr_k, d_k
+                result["half_power_warnings"] += warns
+                primary_guess = guess
+                continue
+            for key in hp_d:
+                hp_d[key] = list(hp_d[key]) + (list(d_k[key]) if key in d_k
+                                               else [float("nan")] * len(guess))
+            result["half_power_warnings"] += [f"{name} test: {w}" for w in warns]
+            if name == "broadband":
+                H = fr_k["frf"].isel(response=0, reference=0)
+                out["frequency_bb"] = fr_k["frequency"].values
+                out["frf_abs_bb"] = (("frequency_bb",), np.abs(H.values))
+        fn_guess = primary_guess
         hp_d["mode"] = list(range(len(hp_d["fn_hz"])))
         result["half_power"] = hp_d
         result["frf_attrs"] = {k: v for k, v in fr.attrs.items()
                                if isinstance(v, str | int | float)}
         fn_hp, zeta_hp = np.asarray(hp_d["fn_hz"], float), np.asarray(hp_d["zeta"], float)
-        ok = np.isfinite(fn_hp) & np.isfinite(zeta_hp)
+        # the Rayleigh fits take each mode once: the first test's estimate of it (the
+        # same mode from another test is a consistency check of the report)
+        ok = np.isfinite(fn_hp) & np.isfinite(zeta_hp) & _first_of_each_mode(fn_hp)
         H = fr["frf"].isel(response=0, reference=0)
         f = fr["frequency"].values
         band = (f >= 0.5 * min(fn_guess)) & (f <= 1.3 * max(fn_guess))
@@ -256,23 +313,41 @@ def damping(study: Study, arrays, description: dict, known_fn_hz=None):
                 "warnings": _warning_messages(caught)}
         except (ValueError, RuntimeError) as err:  # MvtkError subclasses these
             result["rayleigh_chowdhury"] = {"error": str(err)}
-    if "decay" in meas:
-        m = meas["decay"]
-        th = _time_history(arrays, "decay")
+    decays = [n for n in names if meas[n]["kind"] == "decay"]
+    result["decays"] = {}
+    for k, name in enumerate(decays):
+        m = meas[name]
+        th = _time_history(arrays, name)
         band = tuple(m["band_hz"]) if m.get("band_hz") else None
+        f0 = float(m["fn_hz"]) if m.get("fn_hz") is not None else fn_guess[0]
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            env = md.envelope_fit(th, fn_guess[0], channel=m["channel"], band_hz=band)
-            logd = md.log_decrement(th, fn_guess[0], channel=m["channel"], band_hz=band)
-        result["envelope"] = env.to_dataframe().to_dict(orient="list")
-        result["log_decrement"] = logd.to_dataframe().to_dict(orient="list")
-        result["decay_warnings"] = _warning_messages(caught)
+            env = md.envelope_fit(th, f0, channel=m["channel"], band_hz=band)
+            logd = md.log_decrement(th, f0, channel=m["channel"], band_hz=band)
+        one = {"envelope": env.to_dataframe().to_dict(orient="list"),
+               "log_decrement": logd.to_dataframe().to_dict(orient="list"),
+               "warnings": _warning_messages(caught), "fn_guess_hz": f0,
+               "channel": m["channel"],
+               "settings": {"method": "envelope", "variant": "hilbert", "fn_hz": f0,
+                            "band_hz": band,
+                            "command_options": f"--channel {m['channel']} --method envelope "
+                            f"--fn {float(f0)!r}" + ("" if band is None else
+                                                    f" --band {float(band[0])!r} "
+                                                    f"{float(band[1])!r}")}}
+        result["decays"][name] = one
+        if k:
+            continue
+        result["envelope"] = one["envelope"]
+        result["log_decrement"] = one["log_decrement"]
         x = th.sel(channel=m["channel"]).values
         t = th["time"].values
         step = max(1, len(t) // 6000)
         out["decay_t"] = (("decay_time",), t[::step])
         out["decay_x"] = (("decay_time",), x[::step])
         result["decay_units"] = str(th["units"].values[0]) if "units" in th.coords else ""
+    result["decay_warnings"] = [w if k == 0 else f"{name} test: {w}"
+                                for k, name in enumerate(decays)
+                                for w in result["decays"][name]["warnings"]]
     if zeta_hp is not None:
         model_damping = cfg.get("model_damping", "half_power")
         pair = result.get(f"rayleigh_{model_damping}", {})
@@ -316,7 +391,146 @@ def _affine_parameters(desc: dict, paths: list[str]) -> bool:
     return True
 
 
-def updating(study: Study, modal_arrays=None):
+def nominal_modes(model, f_top_hz: float, n_min: int = 8, n_max: int = 60):
+    """Modes of ``model`` up to at least ``f_top_hz`` (Hz), at most ``n_max`` of them.
+
+    Solves for ``n_min`` modes and raises the count by 8 until the highest mode reaches
+    ``f_top_hz`` (or the model has no more free DOFs).
+    """
+    from ..fe import modal_analysis
+
+    n = max(1, min(int(n_min), model.n_dof))
+    while True:
+        modes = modal_analysis(model, n)
+        if modes.fn_hz[-1] >= f_top_hz or n >= min(n_max, model.n_dof):
+            return modes
+        n = min(n + 8, n_max, model.n_dof)
+
+
+def pair_targets(desc: dict, targets: list, builder, model=None):
+    """Fix the FE mode of every target without one by pairing on the nominal model.
+
+    A target that names its ``mode`` keeps it; one with a measured shape is paired by MAC
+    (and stays paired by MAC at every evaluation of the update); every other target is
+    paired one-to-one with the nominal FE mode nearest in frequency
+    (:func:`mvtk.updating.pair_modes` with ``rest="frequency"``, mode types respected),
+    and that mode is written into the target, so a measurement that missed a mode
+    cannot shift the pairing to the next mode in order.
+
+    Returns
+    -------
+    (list of FrequencyTarget, list of dict)
+        The targets (with ``mode`` set where paired by frequency) and one row per target:
+        ``target``, ``fn_hz``, ``fe_mode`` (1-based), ``fe_fn_hz`` (nominal model),
+        ``df_pct``, ``paired_by`` (``fixed``, ``mac``, ``frequency``) and ``mac``.
+    """
+    import dataclasses
+
+    from ..updating import classify_modes, pair_modes, target_mac
+
+    if not targets:
+        return targets, []
+    model = builder(desc) if model is None else model
+    need = max([t.mode or 0 for t in targets] + [len(targets) + 4, 8])
+    f_top = 1.3 * max(t.fn_hz for t in targets)
+    modes = nominal_modes(model, f_top, n_min=need)
+    # the update numbers elastic modes only: rigid-body modes (below 1 % of the lowest
+    # target, as mvtk.updating.update drops them) are not counted
+    elastic = np.asarray(modes.fn_hz) >= 0.01 * min(t.fn_hz for t in targets)
+    fn = np.asarray(modes.fn_hz, dtype=float)[elastic]
+    vectors = np.asarray(modes.shapes)[:, elastic]
+    kinds = (classify_modes(model, vectors) if any(t.kind for t in targets) else None)
+    macm = (target_mac(model, vectors, targets) if any(t.has_shape for t in targets)
+            else None)
+    pr = pair_modes(targets, fn, macm, kinds, rest="frequency")
+    out, rows = [], []
+    for i, t in enumerate(targets):
+        m = int(pr.modes[i])
+        if pr.method[i] == "frequency":
+            t = dataclasses.replace(t, mode=m + 1)
+        out.append(t)
+        f_fe = float(fn[m])
+        rows.append({"target": t.label or f"f{i + 1}", "fn_hz": float(t.fn_hz),
+                     "fe_mode": m + 1, "fe_fn_hz": f_fe,
+                     "df_pct": 100.0 * (f_fe / t.fn_hz - 1.0), "paired_by": pr.method[i],
+                     "mac": float(pr.mac[i])})
+    return out, rows
+
+
+def identifiability(res, paths: list[str], cond_max: float) -> dict:
+    """The study's identifiability verdict of an update, from its log-sensitivities.
+
+    ``S = d ln f / d ln p`` (targets x free parameters, :attr:`UpdateResult.sensitivity`)
+    is the Jacobian of the log-frequencies in log-parameters: ``S'S`` is the Fisher
+    matrix for a uniform relative frequency error. The update is *identifiable* when
+    :func:`mvtk.updating.update` found no null direction, no parameter ended on a bound,
+    and ``cond(S) = s_max / s_min <= cond_max`` (a relative frequency error ``e`` moves
+    the weakest parameter combination by up to ``cond(S) e / s_max``). Otherwise the
+    parameter combination the frequencies do determine is stated: the right singular
+    vector of ``s_max``, as a product of powers ``p1^a1 p2^a2 ...`` (largest ``|a|``
+    = 1). A single free parameter with a nonzero sensitivity is always identifiable
+    unless it ends on a bound.
+
+    Returns
+    -------
+    dict
+        ``identifiable_study`` (bool), ``log_condition_number``, ``not_identifiable_why``
+        (str, empty when identifiable) and ``identifiable_combination`` (str).
+    """
+    S = np.asarray(res.sensitivity, dtype=float)
+    free = [p for p, prm in zip(paths, res.parameters) if not prm.fixed]
+    at_bound = [p for p, b in zip(paths, np.asarray(res.at_bound, bool)) if b]
+    why = []
+    cond, combo = float("nan"), ""
+    if S.ndim == 2 and S.size and np.isfinite(S).all():
+        _, sv, vt = np.linalg.svd(S, full_matrices=False)
+        cond = float(sv[0] / sv[-1]) if sv[-1] > 0 else float("inf")
+        v = vt[0] / vt[0][np.argmax(np.abs(vt[0]))]   # the largest exponent is +1
+        combo = " * ".join(f"{p}^{c:.2f}" for p, c in zip(free, v) if abs(c) > 5e-3)
+        if S.shape[1] > S.shape[0]:
+            why.append(f"{S.shape[0]} target(s) for {S.shape[1]} free parameters")
+        elif cond > cond_max:
+            why.append(f"condition number of the log-sensitivities {cond:.3g} > {cond_max:g}")
+    if not bool(res.identifiable) and not why:
+        why.append("mvtk.updating found a null direction")
+    if at_bound:
+        why.append(f"{', '.join(at_bound)} ended on a bound")
+    return {"identifiable_study": not why, "log_condition_number": cond,
+            "not_identifiable_why": "; ".join(why), "identifiable_combination": combo}
+
+
+def _normal_mode_shapes(study: Study, targets: list, attached: list, modal_result):
+    """Keep only the identified shapes that are normal modes (MPC and MPD in tolerance).
+
+    A shape with a modal phase collinearity below ``checks.mpc_min`` or a mean phase
+    deviation above ``checks.mpd_max_deg`` (a complex shape: leakage, a close mode,
+    noise) is not a reliable basis for a MAC pairing; its target is paired by frequency
+    instead. Returns the targets, the attached test modes and one note per shape dropped.
+    """
+    import dataclasses
+
+    if not modal_result:
+        return targets, attached, []
+    tol = study.config["checks"]
+    tab = modal_result.get("table") or {}
+    q = {int(m): (float(c), float(d)) for m, c, d in
+         zip(tab.get("mode", []), tab.get("mpc", []), tab.get("mpd", []))}
+    out, att, notes = [], [], []
+    for t, k in zip(targets, attached):
+        if k is not None and k in q:
+            mpc, mpd = q[k]
+            if not (mpc >= tol["mpc_min"] and mpd <= tol["mpd_max_deg"]):
+                notes.append(f"target {t.label or t.fn_hz}: the shape of test mode {k} "
+                             f"({t.fn_hz:.4g} Hz) is not a normal mode (MPC {mpc:.3f} < "
+                             f"{tol['mpc_min']:g} or MPD {mpd:.1f} > {tol['mpd_max_deg']:g} "
+                             "deg): paired by frequency instead of MAC")
+                t, k = dataclasses.replace(t, shape=None), None
+        out.append(t)
+        att.append(k)
+    return out, att, notes
+
+
+def updating(study: Study, modal_arrays=None, modal_result=None):
     """Sensitivity-based update of the configured parameters to the target frequencies.
 
     Reads ``[updating]``: ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables,
@@ -348,15 +562,25 @@ def updating(study: Study, modal_arrays=None):
                    for i, t in enumerate(cfg["targets"])]
     attached = [None] * len(targets)
     modal_cfg = study.section("modal")
+    builder = import_builder(cfg["builder"]) if cfg.get("builder") is not None else None
+    if builder is None:
+        from ..fe import build_model as builder_or_default
+    else:
+        builder_or_default = builder
+    nominal_model = None
+    dropped: list[str] = []
     if modal_arrays is not None and modal_cfg is not None and modal_cfg["pair_updating"]:
-        from ..fe import build_model
         from ._ema import shape_targets
 
-        targets, attached = shape_targets(study, targets, modal_arrays, build_model(desc))
+        nominal_model = builder_or_default(desc)
+        targets, attached = shape_targets(study, targets, modal_arrays, nominal_model)
+        targets, attached, dropped = _normal_mode_shapes(study, targets, attached,
+                                                         modal_result)
+    targets, pairing_table = pair_targets(desc, targets, builder_or_default, nominal_model)
     kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
               if cfg.get(k) is not None}
-    if cfg.get("builder") is not None:
-        kwargs["builder"] = import_builder(cfg["builder"])
+    if builder is not None:
+        kwargs["builder"] = builder
     else:
         kwargs["affine"] = _affine_parameters(desc, [p.path for p in params])
     with warnings.catch_warnings(record=True) as caught:
@@ -377,6 +601,9 @@ def updating(study: Study, modal_arrays=None):
         "modes": res.modes, "model_fn_hz": res.model_fn_hz,
         "model_kinds": list(res.model_kinds),
         "identifiable": bool(res.identifiable), "condition_number": res.condition_number,
+        "nominal_pairing": pairing_table,
+        "shapes_not_used": dropped,
+        **identifiability(res, [p.path for p in params], float(cfg["identifiability_cond_max"])),
         "n_evaluations": res.n_evaluations,
         "description": res.description,
         "warnings": _warning_messages(caught),

@@ -9,7 +9,7 @@ diagnostics (residuals, parameter changes and uncertainty, sensitivities,
 identifiability, unpaired modes).
 """
 
-from ._pairing import Pairing, classify_modes, mac, pair_modes, target_mac
+from ._pairing import Pairing, classify_modes, mac, pair_by_frequency, pair_modes, target_mac
 from ._parameters import Parameter, get_path, set_path, with_values
 from ._sensitivity import Sensitivity, eigen_sensitivity
 from ._targets import FrequencyTarget, targets_from_modal_result, targets_from_shapes
@@ -26,6 +26,7 @@ __all__ = [
     "mac",
     "classify_modes",
     "pair_modes",
+    "pair_by_frequency",
     "target_mac",
     "Pairing",
     "eigen_sensitivity",

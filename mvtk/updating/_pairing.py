@@ -12,7 +12,7 @@ from ..errors import DimensionError, ParameterError
 from ..fe._model import DOF_NAMES, FEModel
 from ._targets import FrequencyTarget
 
-__all__ = ["mac", "classify_modes", "pair_modes", "Pairing"]
+__all__ = ["mac", "classify_modes", "pair_modes", "pair_by_frequency", "Pairing"]
 
 
 def mac(phi_a: np.ndarray, phi_b: np.ndarray) -> np.ndarray:
@@ -123,7 +123,8 @@ class Pairing:
     mac : ndarray, shape (n_targets,)
         MAC of each pair (NaN for targets without a measured shape).
     method : tuple of str
-        How each target was paired: ``"fixed"``, ``"mac"`` or ``"order"``.
+        How each target was paired: ``"fixed"``, ``"mac"``, ``"frequency"`` or
+        ``"order"``.
     """
 
     modes: np.ndarray
@@ -163,20 +164,91 @@ def target_mac(model: FEModel, vectors: np.ndarray, targets: Sequence[FrequencyT
     return out
 
 
+def pair_by_frequency(
+    target_hz: Sequence[float],
+    model_hz: Sequence[float],
+    *,
+    target_kinds: Sequence[str | None] | None = None,
+    model_kinds: Sequence[str] | None = None,
+    exclude: Sequence[int] = (),
+    max_rel: float | None = None,
+) -> np.ndarray:
+    """Pair measured frequencies with distinct model modes by frequency (one-to-one).
+
+    The Hungarian algorithm (:func:`scipy.optimize.linear_sum_assignment`) minimises the
+    sum of ``|ln(f_model / f_target)|`` over the pairs, so a measurement that missed a
+    mode (a sensor on its nodal line) is paired with the model mode nearest in frequency,
+    not with the next one in order. A target with a kind is only paired with model
+    modes of that kind (when ``model_kinds`` are given).
+
+    Parameters
+    ----------
+    target_hz : sequence of float
+        Measured natural frequencies (Hz), any order.
+    model_hz : sequence of float
+        Model natural frequencies (Hz), ascending (mode ``k`` is index ``k``).
+    target_kinds : sequence of str or None, optional
+        Mode type of each target (None: any).
+    model_kinds : sequence of str, optional
+        Mode type of each model mode (:func:`classify_modes`).
+    exclude : sequence of int
+        0-based model modes that are taken already.
+    max_rel : float, optional
+        Largest accepted ``|f_model / f_target - 1|``: a target farther from every free
+        mode is left unpaired (-1).
+
+    Returns
+    -------
+    ndarray of int, shape (n_targets,)
+        0-based model mode of each target, -1 when unpaired (more targets than free
+        modes of their kind, or beyond ``max_rel``).
+    """
+    from scipy.optimize import linear_sum_assignment
+
+    ft = np.asarray(target_hz, dtype=float).reshape(-1)
+    fm = np.asarray(model_hz, dtype=float).reshape(-1)
+    out = np.full(ft.size, -1, dtype=np.int64)
+    free = [m for m in range(fm.size) if m not in set(exclude) and fm[m] > 0]
+    if not ft.size or not free:
+        return out
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cost = np.abs(np.log(fm[free][None, :] / ft[:, None]))
+    big = 1e6
+    cost = np.where(np.isfinite(cost), cost, big)
+    if target_kinds is not None and model_kinds is not None:
+        for i, k in enumerate(target_kinds):
+            if k is not None:
+                cost[i, [model_kinds[m] != k for m in free]] = big
+    rows, cols = linear_sum_assignment(cost)
+    for r, c in zip(rows, cols):
+        if cost[r, c] >= big:
+            continue
+        if max_rel is not None and abs(fm[free[c]] / ft[r] - 1.0) > max_rel:
+            continue
+        out[r] = free[c]
+    return out
+
+
 def pair_modes(
     targets: Sequence[FrequencyTarget],
     fn_hz: np.ndarray,
     mac_matrix: np.ndarray | None = None,
     kinds: Sequence[str] | None = None,
+    rest: str = "order",
 ) -> Pairing:
     """Pair each target with a distinct model mode.
 
     Order of rules: (1) targets with an explicit ``mode`` take that mode; (2) targets
     with a measured shape are assigned one-to-one by the Hungarian algorithm
     (:func:`scipy.optimize.linear_sum_assignment`) on ``1 - MAC`` among the remaining
-    modes; (3) the other targets, in ascending measured frequency, take the lowest
-    remaining mode, restricted to modes of the same ``kind`` when the target has a kind
-    and ``kinds`` (model mode labels) are given.
+    modes; (3) the other targets, with ``rest="order"``, in ascending measured frequency,
+    take the lowest remaining mode, restricted to modes of the same ``kind`` when the
+    target has a kind and ``kinds`` (model mode labels) are given; with
+    ``rest="frequency"`` they are paired one-to-one with the remaining modes nearest in
+    frequency (:func:`pair_by_frequency`, kinds respected), which is right when the
+    measurement may have missed modes. Order pairing is the one to use *during* an
+    update (the pairing must not jump between evaluations); frequency pairing is the
+    one to fix the modes on the nominal model beforehand.
 
     Parameters
     ----------
@@ -224,8 +296,19 @@ def pair_modes(
         for r, c in zip(rows, cols):
             modes[shaped[r]], method[shaped[r]] = free[c], "mac"
             used.add(free[c])
-    rest = sorted((i for i in range(n_t) if modes[i] < 0), key=lambda i: targets[i].fn_hz)
-    for i in rest:
+    if rest not in ("order", "frequency"):
+        raise ParameterError(f"rest must be 'order' or 'frequency', got {rest!r}")
+    left = sorted((i for i in range(n_t) if modes[i] < 0), key=lambda i: targets[i].fn_hz)
+    if rest == "frequency" and left:
+        got = pair_by_frequency([targets[i].fn_hz for i in left], fn_hz,
+                                target_kinds=[targets[i].kind for i in left],
+                                model_kinds=kinds, exclude=sorted(used))
+        for i, m in zip(left, got):
+            if m >= 0:
+                modes[i], method[i] = int(m), "frequency"
+                used.add(int(m))
+        left = [i for i in left if modes[i] < 0]
+    for i in left:
         t = targets[i]
         want = t.kind if (t.kind is not None and kinds is not None) else None
         cands = [m for m in range(n_m) if m not in used and (want is None or kinds[m] == want)]

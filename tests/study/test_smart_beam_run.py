@@ -209,3 +209,23 @@ def test_report_renders_in_chromium(out_dir, tmp_path):
     res = cr.run_cmd([exe, *cr.FLAGS, f"--user-data-dir={tmp_path / 'ud2'}",
                       f"--screenshot={shot}", "--window-size=1280,4000", page.as_uri()])
     assert res.returncode == 0 and shot.stat().st_size > 10_000
+
+
+def test_damping_table_is_the_one_of_mvtk_damping(out_dir, capsys):
+    """One estimator per measurement: `mvtk damping FILE` with the options the study
+    states (its record length and force window) gives the study's table to 1e-9."""
+    import json
+
+    res = json.loads((out_dir / "cache" / "damping.json").read_text())["result"]
+    hp = res["half_power"]
+    for name in ("impact", "broadband"):
+        opts = res["half_power_settings"][name]["command_options"].split()
+        assert "--force-window" in opts and "--nperseg" in opts
+        capsys.readouterr()
+        main(["damping", str(STUDY.parent / f"SYNTHETIC_smart_beam_{name}.csv"), *opts,
+              "--json"])
+        rows = json.loads(capsys.readouterr().out)
+        mine = [i for i, t in enumerate(hp["test"]) if t == name]
+        for key in ("fn_hz", "zeta", "f1_hz", "f2_hz"):
+            assert [r[key] for r in rows] == pytest.approx([hp[key][i] for i in mine],
+                                                           rel=1e-9, abs=0)
