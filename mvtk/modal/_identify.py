@@ -112,15 +112,71 @@ def _rotate_real(psi):
     return out, out.real.copy()
 
 
-def _driving_point(h):
+def _driving_points(h):
+    """``[(response index, reference index), ...]`` of every driving point of the matrix.
+
+    A response is the driving point of a reference when its node and direction (sign
+    ignored) match the reference's, or, without nodes, when their names match.
+    """
+    out = []
     for i in range(h.sizes["reference"]):
         rn, rd = int(h["reference_node"].values[i]), str(h["reference_direction"].values[i])
         for o in range(h.sizes["response"]):
             same = (rn >= 0 and int(h["node"].values[o]) == rn
                     and str(h["direction"].values[o]).lstrip("+") == rd.lstrip("+") and rd)
             if same or str(h["response"].values[o]) == str(h["reference"].values[i]):
-                return o, i
-    return None
+                out.append((o, i))
+                break
+    return out
+
+
+def rank_one_shapes(residue, pole, driving_points):
+    """Shapes and participations of every mode from the residues of all references.
+
+    Each mode's residue matrix ``A_m`` (``n_response x n_reference``) is replaced by its
+    best rank-one approximation ``psi_m L_m^T`` (first singular pair: the least-squares
+    estimate over all references, so a mode small at one driving point is carried by
+    the others). With driving points ``(o_k, i_k)`` the shape is scaled to unit modal A
+    (``A_m = phi_m phi_m^T`` on the driving-point rows): reciprocity ``phi_{o_k} =
+    phi_{ref, i_k}`` gives ``c^2 psi_{o_k} = L_{i_k}`` for ``phi = c psi`` and ``c^2`` is
+    their least-squares solution over all driving points (weighted by
+    ``|psi_{o_k}|^2``, so no single small driving-point value decides the scale).
+
+    Parameters
+    ----------
+    residue : numpy.ndarray, shape (n_modes, n_response, n_reference)
+        Receptance residues (m/N/s for ``A / (i w - lambda)``).
+    pole : numpy.ndarray of complex, (n_modes,)
+        Poles in rad/s.
+    driving_points : list of (int, int)
+        ``(response index, reference index)`` pairs; empty: no mass scaling.
+
+    Returns
+    -------
+    shapes : numpy.ndarray of complex, (n_modes, n_response)
+        Unit-modal-A shapes (``A_oi = phi_o phi_i``) when driving points exist, else
+        the singular vector scaled to largest component 1.
+    participation : numpy.ndarray of complex, (n_modes, n_reference)
+        Unit-norm participation ``L_m`` of the references, ``A_m ~ psi_m L_m^T``.
+    scaled : bool
+        Whether the shapes are scaled from driving points.
+    """
+    nm, no, ni = residue.shape
+    psi = np.zeros((nm, no), complex)
+    part = np.zeros((nm, ni), complex)
+    for m in range(nm):
+        u, s, vh = np.linalg.svd(residue[m], full_matrices=False)
+        psi[m] = u[:, 0] * s[0]
+        part[m] = vh[0]                      # A_m ~ psi_m part_m^T
+    if not driving_points or nm == 0:
+        return psi, part, False
+    o = np.array([d[0] for d in driving_points])
+    i = np.array([d[1] for d in driving_points])
+    num = np.sum(np.conj(psi[:, o]) * part[:, i], axis=1)
+    den = np.sum(np.abs(psi[:, o]) ** 2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.sqrt(np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan))
+    return psi * c[:, None], part, True
 
 
 MIN_SUPPORT = 2.0
@@ -333,28 +389,17 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
     nm = sel.pole.size
     no = h.sizes["response"]
-    psi = np.zeros((nm, no), complex)
-    part = np.zeros((nm, h.sizes["reference"]), complex)
-    for m in range(nm):
-        u, s, vh = np.linalg.svd(fit.residue[m], full_matrices=False)
-        psi[m] = u[:, 0] * s[0]
-        part[m] = np.conj(vh[0])
-    dp = _driving_point(h)
-    if dp is not None and nm:
-        o, i = dp
-        wd = sel.pole.imag
-        scaled = fit.residue[:, :, i] * (2j * wd)[:, None]       # phi_o phi_i
-        phid = np.sqrt(scaled[:, o])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            phi = scaled / phid[:, None]
-        rot, real = _rotate_real(phi)
-        cplx = phi / np.sqrt(2j * wd)[:, None]
+    phi, part, scaled = rank_one_shapes(fit.residue, sel.pole, _driving_points(h))
+    if scaled:
+        cplx = phi
+        # phi sqrt(2 i w_d): the real mass-normalised shape of a proportionally damped mode
+        rot, real = _rotate_real(phi * np.sqrt(2j * sel.pole.imag)[:, None])
         norm = "mass"
     else:
-        amp = np.abs(psi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
-        idx = np.argmax(np.abs(psi), axis=1) if nm else np.zeros(0, int)
-        ph = np.exp(-1j * np.angle(psi[np.arange(nm), idx]))[:, None] if nm else 1
-        cplx = psi * ph / np.where(amp > 0, amp, 1)
+        amp = np.abs(phi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
+        idx = np.argmax(np.abs(phi), axis=1) if nm else np.zeros(0, int)
+        ph = np.exp(-1j * np.angle(phi[np.arange(nm), idx]))[:, None] if nm else 1
+        cplx = phi * ph / np.where(amp > 0, amp, 1)
         rot, real = _rotate_real(cplx)
         real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
         norm = "unit_max"

@@ -119,6 +119,24 @@ class IdentifiedModes:
             "reliable": self.reliable, "reason": list(self.reason),
         })
 
+    def shape_table(self, real: bool = False) -> pd.DataFrame:
+        """The shapes as one row per mode and DOF: ``mode dof node direction real imag``.
+
+        ``real`` picks :attr:`real_shapes` instead of the complex :attr:`shapes` (then
+        ``imag`` is 0). The long form suits CSV and JSON
+        (``to_json(orient="records", double_precision=15)``).
+        """
+        s = self.real_shapes if real else self.shapes
+        v = np.asarray(s.values, dtype=complex)
+        nm, nd = v.shape
+        return pd.DataFrame({
+            "mode": np.repeat(s["mode"].values, nd),
+            "dof": np.tile(np.asarray(s["dof"].values, dtype=str), nm),
+            "node": np.tile(s["node"].values, nm),
+            "direction": np.tile(np.asarray(s["direction"].values, dtype=str), nm),
+            "real": v.real.ravel(), "imag": v.imag.ravel(),
+        })
+
     def automac(self, real: bool = False) -> xr.DataArray:
         """AutoMAC of the (complex, or real) shapes, dims ``("mode", "mode_2")``."""
         s = self.real_shapes if real else self.shapes
