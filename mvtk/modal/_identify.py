@@ -8,6 +8,7 @@ import xarray as xr
 from ._lsfd import lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
+from ._refine import pole_std, refine_poles
 from ._result import IdentifiedModes
 from ._stabilisation import (
     ClusterCriteria,
@@ -225,8 +226,11 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
                   contribution=None, min_contribution=0.1, local=None, min_local=0.8,
                   support=None, min_support=MIN_SUPPORT, half_hz=None,
                   excitation_db=None, min_excitation_db=None, excitation_name="force",
-                  kurtosis=None, max_harmonic_kurtosis=None):
-    """``reliable`` and ``reason`` per mode from the stated criteria."""
+                  kurtosis=None, max_harmonic_kurtosis=None, zeta_fit=None):
+    """``reliable`` and ``reason`` per mode from the stated criteria.
+
+    ``zeta_fit``: damping of the fitted FRFs (before an exponential window's damping
+    was removed) for the resolution check; default ``zeta``."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
     kurtosis = nan if kurtosis is None else kurtosis
@@ -235,9 +239,10 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     support = nan if support is None else support
     half_hz = nan if half_hz is None else half_hz
     excitation_db = nan if excitation_db is None else excitation_db
-    for f, z, m, c, q, loc, sup, hw, ex, ku in zip(fn, zeta, mpc_v, count, contribution,
-                                                   local, support, half_hz, excitation_db,
-                                                   kurtosis):
+    zeta_fit = zeta if zeta_fit is None else zeta_fit
+    for f, z, m, c, q, loc, sup, hw, ex, ku, zf in zip(fn, zeta, mpc_v, count, contribution,
+                                                       local, support, half_hz,
+                                                       excitation_db, kurtosis, zeta_fit):
         why = []
         if max_harmonic_kurtosis is not None and np.isfinite(ku) and ku < max_harmonic_kurtosis:
             why.append(f"harmonic: kurtosis of the band-passed response {ku:.2f} "
@@ -256,8 +261,8 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
         if np.isfinite(q) and q < min_contribution:
             why.append(f"weak: the mode makes {q:.0%} of |H| at its frequency "
                        f"(< {min_contribution:.0%})")
-        if df_hz is not None and 0 < z and 2 * z * f < df_hz:
-            why.append(f"half-power bandwidth {2 * z * f:.3g} Hz < line spacing "
+        if df_hz is not None and 0 < zf and 2 * zf * f < df_hz:
+            why.append(f"half-power bandwidth {2 * zf * f:.3g} Hz < line spacing "
                        f"{df_hz:.3g} Hz: damping not resolved")
         if c < need:
             why.append(f"stable in {c} model orders (< {need:g})")
@@ -282,8 +287,10 @@ def identify(
     stability: StabilityCriteria | None = None,
     clustering: ClusterCriteria | None = None,
     residuals: bool = True,
+    refine: bool = True,
 ) -> IdentifiedModes:
-    """Identify modes from an FRF matrix: pLSCF poles, automatic selection, LSFD shapes.
+    """Identify modes from an FRF matrix: pLSCF poles, automatic selection, maximum-
+    likelihood refinement, LSFD shapes, uncertainty of every modal parameter.
 
     Parameters
     ----------
@@ -307,6 +314,12 @@ def identify(
         selection (:class:`ClusterCriteria`).
     residuals : bool
         Fit lower and upper residuals in LSFD (default True).
+    refine : bool
+        Refine the selected poles by weighted nonlinear least squares on the FRFs
+        (maximum likelihood for Gaussian noise; :func:`mvtk.modal._refine.refine_poles`)
+        and give their standard deviations (default True). ``False``: the selected
+        pLSCF poles as they are, standard deviations still from the same first-order
+        covariance at those poles.
 
     Returns
     -------
@@ -321,8 +334,14 @@ def identify(
         its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
         -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
         coordinate, e.g. UFF 58 FRFs), complex
-        and real shapes at the response DOFs (mass-normalised when a driving point
-        exists), synthesised FRFs and their correlation with the measured ones.
+        and real shapes at the response DOFs from the residues of all references
+        (mass-normalised when driving points exist), synthesised FRFs and their
+        correlation with the measured ones; ``fn_std_hz``, ``zeta_std`` and
+        ``shape_std``: first-order standard deviations from the FRF noise (the fit
+        residual of each FRF). When the FRFs carry ``attrs["exponential_window_tau_s"]``
+        (or ``exp_window_tau_s``) the damping the window added, ``1 / (tau w_n)``, is
+        removed from every pole (:func:`mvtk.signal.exponential_window_correction`) and
+        stated in the ``zeta_window`` column and ``window_tau_s``.
 
     Raises
     ------
@@ -339,7 +358,8 @@ def identify(
         sel = poles_near(diagram, fn_hz)
     else:
         sel = select_poles(diagram, clus)
-    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals)
+    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals,
+                            refine=refine)
 
 
 def _contribution(fit, h):
@@ -372,28 +392,51 @@ def _local_correlation(Hm, Hs, windows):
     return out
 
 
-def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True):
-    """LSFD on the selected poles and everything the result table needs."""
+def window_tau(h) -> float | None:
+    """Time constant (s) of the exponential window the FRFs were computed with, or None."""
+    for key in ("exponential_window_tau_s", "exp_window_tau_s"):
+        v = h.attrs.get(key)
+        if v is not None and np.isfinite(float(v)) and float(v) > 0:
+            return float(v)
+    return None
+
+
+def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True,
+                     refine=True):
+    """Refinement, LSFD on the selected poles and everything the result table needs."""
+    from mvtk.signal import exponential_window_correction
+
     f = h["frequency"].values
     kind = h.attrs.get("frf_type", "other")
-    fn = np.abs(sel.pole) / (2 * np.pi)
-    zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
-    windows, half = _windows(f, fn, zeta)
     Hv = h.values
     finite = np.all(np.isfinite(Hv), axis=(0, 1))
-    fit, (r_with, r_without, _) = lsfd_with_misfit(
-        Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0), f, sel.pole, kind,
-        [w & finite for w in windows], residuals=residuals)
+    Hf = Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0)
+    pole = sel.pole
+    nm = pole.size
+    cov = np.full((nm, 2, 2), np.nan)
+    refined = np.zeros(nm, bool)
+    noise = None
+    if nm:
+        ref = refine_poles(Hf[:, :, finite], f[finite], pole, kind, residuals=residuals,
+                           max_nfev=50 if refine else 0)
+        if refine:
+            pole, refined = ref.pole, ref.refined
+        cov, noise = ref.covariance, ref.noise_std
+    fn = np.abs(pole) / (2 * np.pi)
+    zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
+    windows, half = _windows(f, fn, zeta)
+    fit, (r_with, r_without, _), coef_var = lsfd_with_misfit(
+        Hf, f, pole, kind, [w & finite for w in windows], residuals=residuals,
+        coef_variance=True)
     # support: misfit without / with the mode within its window
     with np.errstate(divide="ignore", invalid="ignore"):
         support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
-    nm = sel.pole.size
     no = h.sizes["response"]
-    phi, part, scaled = rank_one_shapes(fit.residue, sel.pole, _driving_points(h))
+    phi, part, scaled = rank_one_shapes(fit.residue, pole, _driving_points(h))
     if scaled:
         cplx = phi
         # phi sqrt(2 i w_d): the real mass-normalised shape of a proportionally damped mode
-        rot, real = _rotate_real(phi * np.sqrt(2j * sel.pole.imag)[:, None])
+        rot, real = _rotate_real(phi * np.sqrt(2j * pole.imag)[:, None])
         norm = "mass"
     else:
         amp = np.abs(phi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
@@ -403,7 +446,23 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         rot, real = _rotate_real(cplx)
         real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
         norm = "unit_max"
+    psi_std = _shape_std(coef_var, part, noise, no)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.linalg.norm(cplx, axis=1) / np.linalg.norm(phi, axis=1) if nm else 1.0
+    # the window's damping leaves every pole: sigma_true = sigma_id - 1 / tau
+    fn_fit, zeta_fit = fn, zeta
+    tau = window_tau(h)
+    zeta_window = np.full(nm, np.nan)
+    if tau is not None and nm:
+        fn, zeta = exponential_window_correction(fn_fit, zeta_fit, tau)
+        zeta_window = zeta_fit - zeta
+    fn_std, zeta_std = pole_std(2 * np.pi * fn * (-zeta + 1j * np.sqrt(
+        np.clip(1 - zeta**2, 0, None))), cov) if nm else (np.zeros(0), np.zeros(0))
     labels = dof_labels(h["node"].values, h["direction"].values, h["response"].values)
+    shp_std = shapes_array(psi_std * np.atleast_1d(gain)[:, None] if nm else psi_std, fn,
+                           zeta, labels, h["node"].values, h["direction"].values,
+                           "mass" if scaled else "unit_max", "pLSCF+LSFD")
+    shp_std.name = "shape_std"
     shp = shapes_array(cplx, fn, zeta, labels, h["node"].values, h["direction"].values,
                        norm, "pLSCF+LSFD")
     rshp = shapes_array(real, fn, zeta, labels, h["node"].values, h["direction"].values,
@@ -436,17 +495,37 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     kind = str(h.attrs.get("excitation", ""))
     rq = {str(q) for q in h["reference_quantity"].values}
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
-                                     stab.zeta_max, df_hz=df, contribution=contrib,
+                                     stab.zeta_max, df_hz=df, zeta_fit=zeta_fit,
+                                     contribution=contrib,
                                      local=local, support=support, half_hz=half,
                                      excitation_db=exc_db,
                                      min_excitation_db=WEAK_EXCITATION_DB.get(kind),
                                      excitation_name="force" if rq == {"force"}
                                      else "excitation")
     return IdentifiedModes(
-        method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
+        method="pLSCF+LSFD", fn_hz=fn, zeta=zeta,
+        pole=2 * np.pi * fn * (-zeta + 1j * np.sqrt(np.clip(1 - zeta**2, 0, None))),
+        shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
         stability_count=sel.count, reliable=reliable, reason=reason, frf=h,
         synthesised=syn, correlation=corr, residue=fit.residue,
         lower_residual=fit.lower, upper_residual=fit.upper, diagram=diagram,
-        support=support, excitation_db=exc_db,
+        support=support, excitation_db=exc_db, fn_std_hz=fn_std, zeta_std=zeta_std,
+        shape_std=shp_std, refined=refined, zeta_window=zeta_window, window_tau_s=tau,
     )
+
+
+def _shape_std(coef_var, part, noise, no):
+    """First-order std of the rank-one shapes ``psi = A conj(L)`` at fixed poles.
+
+    The LSFD residues of FRF ``(o, i)`` have variances ``s_oi^2 / 2 diag (B^T B)^-1``
+    (``coef_var``: real basis ``B`` of :func:`lsfd`; ``s_oi`` the FRF's complex noise
+    std); with the unit participation ``L``, ``var(psi_o) = sum_i |L_i|^2 var(A_oi)``.
+    Units of the residues.
+    """
+    nm, ni = part.shape
+    if nm == 0 or noise is None:
+        return np.full((nm, no), np.nan)
+    vres = coef_var[0:2 * nm:2] + coef_var[1:2 * nm:2]    # var(Re) + var(Im), unit noise
+    var_a = (np.asarray(noise) ** 2 / 2)[None] * vres[:, None, None]   # (nm, no, ni)
+    return np.sqrt(np.einsum("mi,moi->mo", np.abs(part) ** 2, var_a))

@@ -96,6 +96,12 @@ class IdentifiedModes:
     support: np.ndarray | None = None
     excitation_db: np.ndarray | None = None
     kurtosis: np.ndarray | None = None
+    fn_std_hz: np.ndarray | None = None
+    zeta_std: np.ndarray | None = None
+    shape_std: xr.DataArray | None = None
+    refined: np.ndarray | None = None
+    zeta_window: np.ndarray | None = None
+    window_tau_s: float | None = None
 
     @property
     def n_modes(self) -> int:
@@ -103,19 +109,25 @@ class IdentifiedModes:
         return int(self.fn_hz.size)
 
     def to_dataframe(self) -> pd.DataFrame:
-        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support
-        excitation_db kurtosis reliable reason`` (``support``, ``excitation_db``,
-        ``kurtosis`` NaN where they do not apply: SSI-cov has no FRFs, FRFs without the
-        force no excitation level, pLSCF no time histories)."""
+        """One row per mode: ``mode fn_hz fn_std_hz zeta zeta_std zeta_window mpc mpd
+        stability_count support excitation_db kurtosis refined reliable reason``
+        (``fn_std_hz``, ``zeta_std``, ``zeta_window``, ``support``, ``excitation_db``,
+        ``kurtosis`` NaN where they do not apply: no uncertainty computed, no
+        exponential window, SSI-cov has no FRFs, FRFs without the force no excitation
+        level, pLSCF no time histories)."""
         def column(v):
             return (np.full(self.n_modes, np.nan) if v is None
                     else np.asarray(v, dtype=float))
 
         return pd.DataFrame({
             "mode": np.arange(1, self.n_modes + 1),
-            "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
+            "fn_hz": self.fn_hz, "fn_std_hz": column(self.fn_std_hz), "zeta": self.zeta,
+            "zeta_std": column(self.zeta_std), "zeta_window": column(self.zeta_window),
+            "mpc": self.mpc, "mpd": self.mpd,
             "stability_count": self.stability_count, "support": column(self.support),
             "excitation_db": column(self.excitation_db), "kurtosis": column(self.kurtosis),
+            "refined": (np.zeros(self.n_modes, bool) if self.refined is None
+                        else np.asarray(self.refined, bool)),
             "reliable": self.reliable, "reason": list(self.reason),
         })
 
