@@ -287,7 +287,7 @@ def identify(
     stability: StabilityCriteria | None = None,
     clustering: ClusterCriteria | None = None,
     residuals: bool = True,
-    refine: bool = True,
+    refine: bool | None = None,
 ) -> IdentifiedModes:
     """Identify modes from an FRF matrix: pLSCF poles, automatic selection, maximum-
     likelihood refinement, LSFD shapes, uncertainty of every modal parameter.
@@ -314,12 +314,13 @@ def identify(
         selection (:class:`ClusterCriteria`).
     residuals : bool
         Fit lower and upper residuals in LSFD (default True).
-    refine : bool
+    refine : bool, optional
         Refine the selected poles by weighted nonlinear least squares on the FRFs
-        (maximum likelihood for Gaussian noise; :func:`mvtk.modal._refine.refine_poles`)
-        and give their standard deviations (default True). ``False``: the selected
-        pLSCF poles as they are, standard deviations still from the same first-order
-        covariance at those poles.
+        (maximum likelihood for Gaussian noise; :func:`mvtk.modal._refine.refine_poles`).
+        Default: True with the automatic selection, False with ``fn_hz`` (the poles the
+        user picked may leave out a mode next to them, and a refinement without it
+        would move the pole). ``False``: the selected pLSCF poles as they are; their
+        standard deviations come from the same first-order covariance at those poles.
 
     Returns
     -------
@@ -358,8 +359,10 @@ def identify(
         sel = poles_near(diagram, fn_hz)
     else:
         sel = select_poles(diagram, clus)
+    if refine is None:
+        refine = fn_hz is None
     return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals,
-                            refine=refine)
+                            refine=bool(refine))
 
 
 def _contribution(fit, h):

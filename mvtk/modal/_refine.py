@@ -217,6 +217,11 @@ def refine_poles(H, f_hz, poles, frf_type="receptance", *, residuals=True, varia
         fixed = lam0[near]
         out = _refine_group(H, f, lam0[group], fixed, g_lines, frf_type, residuals,
                             variance, max_nfev)
+        if out[1].any() and not _better(H, f, out[4], frf_type, residuals, group, lam0,
+                                        out[0], out[3]):
+            out = (lam0[group], np.zeros(group.size, bool)) + out[2:5] + (
+                "a refined pole fitted worse than the pLSCF pole with every other pole in "
+                "the model; pLSCF pole kept",)
         pole[group], ok[group], cov[group] = out[0], out[1], out[2]
         if out[3] is not None:
             noise_sq += out[3] ** 2 * out[4].sum()
@@ -227,6 +232,23 @@ def refine_poles(H, f_hz, poles, frf_type="receptance", *, residuals=True, varia
     noise = np.sqrt(noise_sq / nsum) if nsum else np.full((no, ni), np.nan)
     return PoleRefinement(pole, ok, cov, noise, used if nm else lines,
                           "; ".join(sorted(set(msgs))))
+
+
+def _better(H, f, lines, frf_type, residuals, group, lam0, lam_new, noise):
+    """Whether the refined poles of ``group`` fit the group's lines better than the
+    starting ones with every other pole in the model (guards the local model: the tails
+    of far modes are only approximated by the local residual terms). Same weights
+    (``noise``: the std of each FRF) as the refinement."""
+    others = np.delete(lam0, group)
+    power = FRF_TYPES.get(frf_type, 0)
+    no, ni = H.shape[:2]
+    w = np.ones((no, ni)) if noise is None else np.maximum(noise, np.finfo(float).tiny)
+    prob = _Problem(H[:, :, lines], f[lines], power, group.size, residuals, w, others)
+    cost = []
+    for lam in (lam0[group], lam_new):
+        theta = np.column_stack([-lam.real, lam.imag]).ravel()
+        cost.append(float(np.sum(prob.residual(theta) ** 2)))
+    return cost[1] <= cost[0]
 
 
 def _groups(f, fn, zeta):
