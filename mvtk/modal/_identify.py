@@ -120,12 +120,15 @@ def _driving_points(h):
     ignored) match the reference's, or, without nodes, when their names match.
     """
     out = []
-    for i in range(h.sizes["reference"]):
-        rn, rd = int(h["reference_node"].values[i]), str(h["reference_direction"].values[i])
-        for o in range(h.sizes["response"]):
-            same = (rn >= 0 and int(h["node"].values[o]) == rn
-                    and str(h["direction"].values[o]).lstrip("+") == rd.lstrip("+") and rd)
-            if same or str(h["response"].values[o]) == str(h["reference"].values[i]):
+    rnode, rdir = h["reference_node"].values, h["reference_direction"].values
+    rname, node = h["reference"].values, h["node"].values
+    odir, oname = h["direction"].values, h["response"].values
+    for i in range(rnode.size):
+        rn, rd = int(rnode[i]), str(rdir[i])
+        for o in range(node.size):
+            same = (rn >= 0 and int(node[o]) == rn
+                    and str(odir[o]).lstrip("+") == rd.lstrip("+") and rd)
+            if same or str(oname[o]) == str(rname[i]):
                 out.append((o, i))
                 break
     return out

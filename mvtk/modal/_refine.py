@@ -118,6 +118,13 @@ class _Problem:
         return np.vstack([B.real, B.imag]), a, b
 
     def solve(self, theta):
+        key = np.asarray(theta, dtype=float).tobytes()
+        if getattr(self, "_key", None) == key:
+            return self._last
+        self._key, self._last = key, self._solve(theta)
+        return self._last
+
+    def _solve(self, theta):
         lam = np.concatenate([-theta[0::2] + 1j * theta[1::2], self.fixed])
         A, a, b = self.basis(lam)
         cn = np.linalg.norm(A, axis=0)
@@ -135,17 +142,20 @@ class _Problem:
         """Kaufman's variable-projection Jacobian ``-P_perp (dA/dtheta_k) X``."""
         lam, A, a, b, Q, X, _ = self.solve(theta)
         nm = self.nfree
-        J = np.empty((self.Y.size, 2 * nm))
+        nf = self.Y.shape[1]
+        V = np.empty((self.Y.shape[0], 2 * nm, nf))
         for m in range(nm):
             a2, b2 = a[:, m] ** 2, b[:, m] ** 2
             for p, (da, db) in enumerate(((-a2, -b2), (1j * a2, -1j * b2))):
                 c1 = (da + db) * self.pk
                 c2 = 1j * (da - db) * self.pk
-                dB = np.column_stack([c1, c2])
-                dA = np.vstack([dB.real, dB.imag])                     # (rows, 2)
-                v = dA @ X[2 * m:2 * m + 2]                            # (rows, n_frf)
-                v -= Q @ (Q.T @ v)
-                J[:, 2 * m + p] = -v.ravel(order="F")
+                dA = np.vstack([np.column_stack([c1.real, c2.real]),
+                                np.column_stack([c1.imag, c2.imag])])     # (rows, 2)
+                V[:, 2 * m + p] = dA @ X[2 * m:2 * m + 2]                   # (rows, n_frf)
+        V = V.reshape(V.shape[0], -1)
+        V -= Q @ (Q.T @ V)                       # one projection for every parameter
+        V = V.reshape(V.shape[0], 2 * nm, nf)
+        J = -np.ascontiguousarray(V.transpose(2, 0, 1)).reshape(-1, 2 * nm)
         return J
 
 
@@ -240,6 +250,8 @@ def _better(H, f, lines, frf_type, residuals, group, lam0, lam_new, noise):
     of far modes are only approximated by the local residual terms). Same weights
     (``noise``: the std of each FRF) as the refinement."""
     others = np.delete(lam0, group)
+    if others.size == 0:
+        return True                 # the local model is the whole model: refined is best
     power = FRF_TYPES.get(frf_type, 0)
     no, ni = H.shape[:2]
     w = np.ones((no, ni)) if noise is None else np.maximum(noise, np.finfo(float).tiny)
