@@ -207,6 +207,9 @@ def run(args: argparse.Namespace) -> int:
     if args.json:
         out = {"method": modes.method, "band_hz": list(modes.diagram.band_hz),
                "modes": json.loads(table.to_json(orient="records")),
+               "shapes": json.loads(modes.shape_table().to_json(orient="records",
+                                                         double_precision=15)),
+               "shape_normalisation": modes.shapes.attrs.get("normalisation"),
                "frf_correlation": (None if modes.correlation is None
                                    else modes.correlation.attrs["overall"])}
         if modes.frf is not None and modes.frf.attrs.get("set_quality"):

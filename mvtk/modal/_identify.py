@@ -8,6 +8,7 @@ import xarray as xr
 from ._lsfd import lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
+from ._refine import pole_std, refine_poles
 from ._result import IdentifiedModes
 from ._stabilisation import (
     ClusterCriteria,
@@ -112,15 +113,74 @@ def _rotate_real(psi):
     return out, out.real.copy()
 
 
-def _driving_point(h):
-    for i in range(h.sizes["reference"]):
-        rn, rd = int(h["reference_node"].values[i]), str(h["reference_direction"].values[i])
-        for o in range(h.sizes["response"]):
-            same = (rn >= 0 and int(h["node"].values[o]) == rn
-                    and str(h["direction"].values[o]).lstrip("+") == rd.lstrip("+") and rd)
-            if same or str(h["response"].values[o]) == str(h["reference"].values[i]):
-                return o, i
-    return None
+def _driving_points(h):
+    """``[(response index, reference index), ...]`` of every driving point of the matrix.
+
+    A response is the driving point of a reference when its node and direction (sign
+    ignored) match the reference's, or, without nodes, when their names match.
+    """
+    out = []
+    rnode, rdir = h["reference_node"].values, h["reference_direction"].values
+    rname, node = h["reference"].values, h["node"].values
+    odir, oname = h["direction"].values, h["response"].values
+    for i in range(rnode.size):
+        rn, rd = int(rnode[i]), str(rdir[i])
+        for o in range(node.size):
+            same = (rn >= 0 and int(node[o]) == rn
+                    and str(odir[o]).lstrip("+") == rd.lstrip("+") and rd)
+            if same or str(oname[o]) == str(rname[i]):
+                out.append((o, i))
+                break
+    return out
+
+
+def rank_one_shapes(residue, pole, driving_points):
+    """Shapes and participations of every mode from the residues of all references.
+
+    Each mode's residue matrix ``A_m`` (``n_response x n_reference``) is replaced by its
+    best rank-one approximation ``psi_m L_m^T`` (first singular pair: the least-squares
+    estimate over all references, so a mode small at one driving point is carried by
+    the others). With driving points ``(o_k, i_k)`` the shape is scaled to unit modal A
+    (``A_m = phi_m phi_m^T`` on the driving-point rows): reciprocity ``phi_{o_k} =
+    phi_{ref, i_k}`` gives ``c^2 psi_{o_k} = L_{i_k}`` for ``phi = c psi`` and ``c^2`` is
+    their least-squares solution over all driving points (weighted by
+    ``|psi_{o_k}|^2``, so no single small driving-point value decides the scale).
+
+    Parameters
+    ----------
+    residue : numpy.ndarray, shape (n_modes, n_response, n_reference)
+        Receptance residues (m/N/s for ``A / (i w - lambda)``).
+    pole : numpy.ndarray of complex, (n_modes,)
+        Poles in rad/s.
+    driving_points : list of (int, int)
+        ``(response index, reference index)`` pairs; empty: no mass scaling.
+
+    Returns
+    -------
+    shapes : numpy.ndarray of complex, (n_modes, n_response)
+        Unit-modal-A shapes (``A_oi = phi_o phi_i``) when driving points exist, else
+        the singular vector scaled to largest component 1.
+    participation : numpy.ndarray of complex, (n_modes, n_reference)
+        Unit-norm participation ``L_m`` of the references, ``A_m ~ psi_m L_m^T``.
+    scaled : bool
+        Whether the shapes are scaled from driving points.
+    """
+    nm, no, ni = residue.shape
+    psi = np.zeros((nm, no), complex)
+    part = np.zeros((nm, ni), complex)
+    for m in range(nm):
+        u, s, vh = np.linalg.svd(residue[m], full_matrices=False)
+        psi[m] = u[:, 0] * s[0]
+        part[m] = vh[0]                      # A_m ~ psi_m part_m^T
+    if not driving_points or nm == 0:
+        return psi, part, False
+    o = np.array([d[0] for d in driving_points])
+    i = np.array([d[1] for d in driving_points])
+    num = np.sum(np.conj(psi[:, o]) * part[:, i], axis=1)
+    den = np.sum(np.abs(psi[:, o]) ** 2, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.sqrt(np.where(den > 0, num / np.where(den > 0, den, 1.0), np.nan))
+    return psi * c[:, None], part, True
 
 
 MIN_SUPPORT = 2.0
@@ -169,8 +229,11 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
                   contribution=None, min_contribution=0.1, local=None, min_local=0.8,
                   support=None, min_support=MIN_SUPPORT, half_hz=None,
                   excitation_db=None, min_excitation_db=None, excitation_name="force",
-                  kurtosis=None, max_harmonic_kurtosis=None):
-    """``reliable`` and ``reason`` per mode from the stated criteria."""
+                  kurtosis=None, max_harmonic_kurtosis=None, zeta_fit=None):
+    """``reliable`` and ``reason`` per mode from the stated criteria.
+
+    ``zeta_fit``: damping of the fitted FRFs (before an exponential window's damping
+    was removed) for the resolution check; default ``zeta``."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
     kurtosis = nan if kurtosis is None else kurtosis
@@ -179,9 +242,10 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     support = nan if support is None else support
     half_hz = nan if half_hz is None else half_hz
     excitation_db = nan if excitation_db is None else excitation_db
-    for f, z, m, c, q, loc, sup, hw, ex, ku in zip(fn, zeta, mpc_v, count, contribution,
-                                                   local, support, half_hz, excitation_db,
-                                                   kurtosis):
+    zeta_fit = zeta if zeta_fit is None else zeta_fit
+    for f, z, m, c, q, loc, sup, hw, ex, ku, zf in zip(fn, zeta, mpc_v, count, contribution,
+                                                       local, support, half_hz,
+                                                       excitation_db, kurtosis, zeta_fit):
         why = []
         if max_harmonic_kurtosis is not None and np.isfinite(ku) and ku < max_harmonic_kurtosis:
             why.append(f"harmonic: kurtosis of the band-passed response {ku:.2f} "
@@ -200,8 +264,8 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
         if np.isfinite(q) and q < min_contribution:
             why.append(f"weak: the mode makes {q:.0%} of |H| at its frequency "
                        f"(< {min_contribution:.0%})")
-        if df_hz is not None and 0 < z and 2 * z * f < df_hz:
-            why.append(f"half-power bandwidth {2 * z * f:.3g} Hz < line spacing "
+        if df_hz is not None and 0 < zf and 2 * zf * f < df_hz:
+            why.append(f"half-power bandwidth {2 * zf * f:.3g} Hz < line spacing "
                        f"{df_hz:.3g} Hz: damping not resolved")
         if c < need:
             why.append(f"stable in {c} model orders (< {need:g})")
@@ -226,8 +290,10 @@ def identify(
     stability: StabilityCriteria | None = None,
     clustering: ClusterCriteria | None = None,
     residuals: bool = True,
+    refine: bool | None = None,
 ) -> IdentifiedModes:
-    """Identify modes from an FRF matrix: pLSCF poles, automatic selection, LSFD shapes.
+    """Identify modes from an FRF matrix: pLSCF poles, automatic selection, maximum-
+    likelihood refinement, LSFD shapes, uncertainty of every modal parameter.
 
     Parameters
     ----------
@@ -251,6 +317,13 @@ def identify(
         selection (:class:`ClusterCriteria`).
     residuals : bool
         Fit lower and upper residuals in LSFD (default True).
+    refine : bool, optional
+        Refine the selected poles by weighted nonlinear least squares on the FRFs
+        (maximum likelihood for Gaussian noise; :func:`mvtk.modal._refine.refine_poles`).
+        Default: True with the automatic selection, False with ``fn_hz`` (the poles the
+        user picked may leave out a mode next to them, and a refinement without it
+        would move the pole). ``False``: the selected pLSCF poles as they are; their
+        standard deviations come from the same first-order covariance at those poles.
 
     Returns
     -------
@@ -265,8 +338,14 @@ def identify(
         its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
         -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
         coordinate, e.g. UFF 58 FRFs), complex
-        and real shapes at the response DOFs (mass-normalised when a driving point
-        exists), synthesised FRFs and their correlation with the measured ones.
+        and real shapes at the response DOFs from the residues of all references
+        (mass-normalised when driving points exist), synthesised FRFs and their
+        correlation with the measured ones; ``fn_std_hz``, ``zeta_std`` and
+        ``shape_std``: first-order standard deviations from the FRF noise (the fit
+        residual of each FRF). When the FRFs carry ``attrs["exponential_window_tau_s"]``
+        (or ``exp_window_tau_s``) the damping the window added, ``1 / (tau w_n)``, is
+        removed from every pole (:func:`mvtk.signal.exponential_window_correction`) and
+        stated in the ``zeta_window`` column and ``window_tau_s``.
 
     Raises
     ------
@@ -283,7 +362,10 @@ def identify(
         sel = poles_near(diagram, fn_hz)
     else:
         sel = select_poles(diagram, clus)
-    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals)
+    if refine is None:
+        refine = fn_hz is None
+    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals,
+                            refine=bool(refine))
 
 
 def _contribution(fit, h):
@@ -316,49 +398,77 @@ def _local_correlation(Hm, Hs, windows):
     return out
 
 
-def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True):
-    """LSFD on the selected poles and everything the result table needs."""
+def window_tau(h) -> float | None:
+    """Time constant (s) of the exponential window the FRFs were computed with, or None."""
+    for key in ("exponential_window_tau_s", "exp_window_tau_s"):
+        v = h.attrs.get(key)
+        if v is not None and np.isfinite(float(v)) and float(v) > 0:
+            return float(v)
+    return None
+
+
+def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True,
+                     refine=True):
+    """Refinement, LSFD on the selected poles and everything the result table needs."""
+    from mvtk.signal import exponential_window_correction
+
     f = h["frequency"].values
     kind = h.attrs.get("frf_type", "other")
-    fn = np.abs(sel.pole) / (2 * np.pi)
-    zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
-    windows, half = _windows(f, fn, zeta)
     Hv = h.values
     finite = np.all(np.isfinite(Hv), axis=(0, 1))
-    fit, (r_with, r_without, _) = lsfd_with_misfit(
-        Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0), f, sel.pole, kind,
-        [w & finite for w in windows], residuals=residuals)
+    Hf = Hv if finite.all() else np.where(np.isfinite(Hv), Hv, 0.0)
+    pole = sel.pole
+    nm = pole.size
+    cov = np.full((nm, 2, 2), np.nan)
+    refined = np.zeros(nm, bool)
+    noise = None
+    if nm:
+        ref = refine_poles(Hf[:, :, finite], f[finite], pole, kind, residuals=residuals,
+                           max_nfev=50 if refine else 0)
+        if refine:
+            pole, refined = ref.pole, ref.refined
+        cov, noise = ref.covariance, ref.noise_std
+    fn = np.abs(pole) / (2 * np.pi)
+    zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
+    windows, half = _windows(f, fn, zeta)
+    fit, (r_with, r_without, _), coef_var = lsfd_with_misfit(
+        Hf, f, pole, kind, [w & finite for w in windows], residuals=residuals,
+        coef_variance=True)
     # support: misfit without / with the mode within its window
     with np.errstate(divide="ignore", invalid="ignore"):
         support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
-    nm = sel.pole.size
     no = h.sizes["response"]
-    psi = np.zeros((nm, no), complex)
-    part = np.zeros((nm, h.sizes["reference"]), complex)
-    for m in range(nm):
-        u, s, vh = np.linalg.svd(fit.residue[m], full_matrices=False)
-        psi[m] = u[:, 0] * s[0]
-        part[m] = np.conj(vh[0])
-    dp = _driving_point(h)
-    if dp is not None and nm:
-        o, i = dp
-        wd = sel.pole.imag
-        scaled = fit.residue[:, :, i] * (2j * wd)[:, None]       # phi_o phi_i
-        phid = np.sqrt(scaled[:, o])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            phi = scaled / phid[:, None]
-        rot, real = _rotate_real(phi)
-        cplx = phi / np.sqrt(2j * wd)[:, None]
+    phi, part, scaled = rank_one_shapes(fit.residue, pole, _driving_points(h))
+    if scaled:
+        cplx = phi
+        # phi sqrt(2 i w_d): the real mass-normalised shape of a proportionally damped mode
+        rot, real = _rotate_real(phi * np.sqrt(2j * pole.imag)[:, None])
         norm = "mass"
     else:
-        amp = np.abs(psi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
-        idx = np.argmax(np.abs(psi), axis=1) if nm else np.zeros(0, int)
-        ph = np.exp(-1j * np.angle(psi[np.arange(nm), idx]))[:, None] if nm else 1
-        cplx = psi * ph / np.where(amp > 0, amp, 1)
+        amp = np.abs(phi).max(axis=1, keepdims=True) if nm else np.ones((0, 1))
+        idx = np.argmax(np.abs(phi), axis=1) if nm else np.zeros(0, int)
+        ph = np.exp(-1j * np.angle(phi[np.arange(nm), idx]))[:, None] if nm else 1
+        cplx = phi * ph / np.where(amp > 0, amp, 1)
         rot, real = _rotate_real(cplx)
         real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
         norm = "unit_max"
+    psi_std = _shape_std(coef_var, part, noise, no)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gain = np.linalg.norm(cplx, axis=1) / np.linalg.norm(phi, axis=1) if nm else 1.0
+    # the window's damping leaves every pole: sigma_true = sigma_id - 1 / tau
+    fn_fit, zeta_fit = fn, zeta
+    tau = window_tau(h)
+    zeta_window = np.full(nm, np.nan)
+    if tau is not None and nm:
+        fn, zeta = exponential_window_correction(fn_fit, zeta_fit, tau)
+        zeta_window = zeta_fit - zeta
+    fn_std, zeta_std = pole_std(2 * np.pi * fn * (-zeta + 1j * np.sqrt(
+        np.clip(1 - zeta**2, 0, None))), cov) if nm else (np.zeros(0), np.zeros(0))
     labels = dof_labels(h["node"].values, h["direction"].values, h["response"].values)
+    shp_std = shapes_array(psi_std * np.atleast_1d(gain)[:, None] if nm else psi_std, fn,
+                           zeta, labels, h["node"].values, h["direction"].values,
+                           "mass" if scaled else "unit_max", "pLSCF+LSFD")
+    shp_std.name = "shape_std"
     shp = shapes_array(cplx, fn, zeta, labels, h["node"].values, h["direction"].values,
                        norm, "pLSCF+LSFD")
     rshp = shapes_array(real, fn, zeta, labels, h["node"].values, h["direction"].values,
@@ -391,17 +501,37 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     kind = str(h.attrs.get("excitation", ""))
     rq = {str(q) for q in h["reference_quantity"].values}
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, need, diagram.band_hz,
-                                     stab.zeta_max, df_hz=df, contribution=contrib,
+                                     stab.zeta_max, df_hz=df, zeta_fit=zeta_fit,
+                                     contribution=contrib,
                                      local=local, support=support, half_hz=half,
                                      excitation_db=exc_db,
                                      min_excitation_db=WEAK_EXCITATION_DB.get(kind),
                                      excitation_name="force" if rq == {"force"}
                                      else "excitation")
     return IdentifiedModes(
-        method="pLSCF+LSFD", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp,
+        method="pLSCF+LSFD", fn_hz=fn, zeta=zeta,
+        pole=2 * np.pi * fn * (-zeta + 1j * np.sqrt(np.clip(1 - zeta**2, 0, None))),
+        shapes=shp,
         real_shapes=rshp, participation=part, mpc=mpc_v, mpd=mpd_v,
         stability_count=sel.count, reliable=reliable, reason=reason, frf=h,
         synthesised=syn, correlation=corr, residue=fit.residue,
         lower_residual=fit.lower, upper_residual=fit.upper, diagram=diagram,
-        support=support, excitation_db=exc_db,
+        support=support, excitation_db=exc_db, fn_std_hz=fn_std, zeta_std=zeta_std,
+        shape_std=shp_std, refined=refined, zeta_window=zeta_window, window_tau_s=tau,
     )
+
+
+def _shape_std(coef_var, part, noise, no):
+    """First-order std of the rank-one shapes ``psi = A conj(L)`` at fixed poles.
+
+    The LSFD residues of FRF ``(o, i)`` have variances ``s_oi^2 / 2 diag (B^T B)^-1``
+    (``coef_var``: real basis ``B`` of :func:`lsfd`; ``s_oi`` the FRF's complex noise
+    std); with the unit participation ``L``, ``var(psi_o) = sum_i |L_i|^2 var(A_oi)``.
+    Units of the residues.
+    """
+    nm, ni = part.shape
+    if nm == 0 or noise is None:
+        return np.full((nm, no), np.nan)
+    vres = coef_var[0:2 * nm:2] + coef_var[1:2 * nm:2]    # var(Re) + var(Im), unit noise
+    var_a = (np.asarray(noise) ** 2 / 2)[None] * vres[:, None, None]   # (nm, no, ni)
+    return np.sqrt(np.einsum("mi,moi->mo", np.abs(part) ** 2, var_a))

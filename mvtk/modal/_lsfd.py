@@ -187,10 +187,26 @@ def _fit(H, f_hz, poles, frf_type, residuals):
     else:
         lower = upper = np.zeros((no, ni))
     fit = LsfdFit(lam, np.moveaxis(res, -1, 0), lower, upper, power)
-    return fit, A, rhs, keep, qr
+    return fit, A, rhs, keep, qr, colnorm
 
 
-def lsfd_with_misfit(H, f_hz, poles, frf_type, windows, *, residuals=True):
-    """:func:`lsfd` and :func:`local_misfit` from one factorisation of the basis."""
-    fit, A, rhs, keep, qr = _fit(H, f_hz, poles, frf_type, residuals)
-    return fit, _misfits(qr, A, rhs, keep, windows)
+def lsfd_with_misfit(H, f_hz, poles, frf_type, windows, *, residuals=True,
+                     coef_variance=False):
+    """:func:`lsfd` and :func:`local_misfit` from one factorisation of the basis.
+
+    With ``coef_variance`` a third item: the diagonal of ``(B^T B)^-1`` of the real
+    basis (one entry per real coefficient, residue real/imaginary parts first): the
+    variance of each fitted coefficient per unit noise variance of the real and
+    imaginary parts of an FRF line.
+    """
+    fit, A, rhs, keep, qr, colnorm = _fit(H, f_hz, poles, frf_type, residuals)
+    out = (fit, _misfits(qr, A, rhs, keep, windows))
+    if coef_variance:
+        try:
+            Rinv = scipy.linalg.solve_triangular(qr[0], np.eye(qr[0].shape[0]))
+            d = np.sum(Rinv**2, axis=1) / colnorm**2
+        except (np.linalg.LinAlgError, ValueError):
+            d = np.full(A.shape[1], np.nan)
+        out = out + (d,)
+    return out
+

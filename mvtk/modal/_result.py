@@ -96,6 +96,12 @@ class IdentifiedModes:
     support: np.ndarray | None = None
     excitation_db: np.ndarray | None = None
     kurtosis: np.ndarray | None = None
+    fn_std_hz: np.ndarray | None = None
+    zeta_std: np.ndarray | None = None
+    shape_std: xr.DataArray | None = None
+    refined: np.ndarray | None = None
+    zeta_window: np.ndarray | None = None
+    window_tau_s: float | None = None
 
     @property
     def n_modes(self) -> int:
@@ -103,20 +109,44 @@ class IdentifiedModes:
         return int(self.fn_hz.size)
 
     def to_dataframe(self) -> pd.DataFrame:
-        """One row per mode: ``mode fn_hz zeta mpc mpd stability_count support
-        excitation_db kurtosis reliable reason`` (``support``, ``excitation_db``,
-        ``kurtosis`` NaN where they do not apply: SSI-cov has no FRFs, FRFs without the
-        force no excitation level, pLSCF no time histories)."""
+        """One row per mode: ``mode fn_hz fn_std_hz zeta zeta_std zeta_window mpc mpd
+        stability_count support excitation_db kurtosis refined reliable reason``
+        (``fn_std_hz``, ``zeta_std``, ``zeta_window``, ``support``, ``excitation_db``,
+        ``kurtosis`` NaN where they do not apply: no uncertainty computed, no
+        exponential window, SSI-cov has no FRFs, FRFs without the force no excitation
+        level, pLSCF no time histories)."""
         def column(v):
             return (np.full(self.n_modes, np.nan) if v is None
                     else np.asarray(v, dtype=float))
 
         return pd.DataFrame({
             "mode": np.arange(1, self.n_modes + 1),
-            "fn_hz": self.fn_hz, "zeta": self.zeta, "mpc": self.mpc, "mpd": self.mpd,
+            "fn_hz": self.fn_hz, "fn_std_hz": column(self.fn_std_hz), "zeta": self.zeta,
+            "zeta_std": column(self.zeta_std), "zeta_window": column(self.zeta_window),
+            "mpc": self.mpc, "mpd": self.mpd,
             "stability_count": self.stability_count, "support": column(self.support),
             "excitation_db": column(self.excitation_db), "kurtosis": column(self.kurtosis),
+            "refined": (np.zeros(self.n_modes, bool) if self.refined is None
+                        else np.asarray(self.refined, bool)),
             "reliable": self.reliable, "reason": list(self.reason),
+        })
+
+    def shape_table(self, real: bool = False) -> pd.DataFrame:
+        """The shapes as one row per mode and DOF: ``mode dof node direction real imag``.
+
+        ``real`` picks :attr:`real_shapes` instead of the complex :attr:`shapes` (then
+        ``imag`` is 0). The long form suits CSV and JSON
+        (``to_json(orient="records", double_precision=15)``).
+        """
+        s = self.real_shapes if real else self.shapes
+        v = np.asarray(s.values, dtype=complex)
+        nm, nd = v.shape
+        return pd.DataFrame({
+            "mode": np.repeat(s["mode"].values, nd),
+            "dof": np.tile(np.asarray(s["dof"].values, dtype=str), nm),
+            "node": np.tile(s["node"].values, nm),
+            "direction": np.tile(np.asarray(s["direction"].values, dtype=str), nm),
+            "real": v.real.ravel(), "imag": v.imag.ravel(),
         })
 
     def automac(self, real: bool = False) -> xr.DataArray:

@@ -52,6 +52,7 @@ def test_cli_json_and_exports(msys, tmp_path, capsys):
     assert rc == 0
     out = json.loads(capsys.readouterr().out)
     assert out["method"] == "pLSCF+LSFD" and len(out["modes"]) == 4
+    assert len(out["shapes"]) == 16 and out["shape_normalisation"] == "mass"
     np.testing.assert_allclose([m["fn_hz"] for m in out["modes"]], res.fn_hz, rtol=1e-6)
     assert set(out["modes"][0]) >= {"fn_hz", "zeta", "mpc", "mpd", "stability_count",
                                     "support", "reliable", "reason"}

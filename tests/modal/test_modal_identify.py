@@ -118,8 +118,10 @@ def test_poles_near_given_frequencies_and_tables(msys):
     assert abs(res.fn_hz[1] - 170) < 1e-6
     assert abs(res.fn_hz[0] - 100.0) < 1e-6 or abs(res.fn_hz[0] - 100.5) < 1e-6
     df = res.to_dataframe()
-    assert list(df.columns) == ["mode", "fn_hz", "zeta", "mpc", "mpd", "stability_count",
-                                "support", "excitation_db", "kurtosis", "reliable", "reason"]
+    assert list(df.columns) == ["mode", "fn_hz", "fn_std_hz", "zeta", "zeta_std",
+                                "zeta_window", "mpc", "mpd", "stability_count", "support",
+                                "excitation_db", "kurtosis", "refined", "reliable", "reason"]
+    assert not df["refined"].any()          # poles the user picked are not refined
     assert res.shapes.dims == ("mode", "dof")
     assert list(res.shapes["dof"].values[:2]) == ["1+z", "2+z"]
     assert res.shapes["node"].values.tolist() == list(range(1, 9))
