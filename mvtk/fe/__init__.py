@@ -80,6 +80,7 @@ from ._solvers import (
     estimate_eigen_memory,
     factorize,
     fill_reducing_ordering,
+    sparse_backend,
 )
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
 
@@ -91,6 +92,7 @@ __all__ = [
     "factorize",
     "Factorization",
     "fill_reducing_ordering",
+    "sparse_backend",
     "estimate_eigen_memory",
     "MemoryEstimate",
     "SparsityPattern",
