@@ -46,9 +46,18 @@ def write_result(name: str, payload: dict) -> None:
     if not path:
         return
     out = {"benchmark": name, "load_avg_1min": os.getloadavg()[0],
-           "cpu_count": os.cpu_count(), **payload}
+           "cpu_count": os.cpu_count(), "sparse_backend": _sparse_backend(), **payload}
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     Path(path).write_text(json.dumps(out, indent=2, default=_plain))
+
+
+def _sparse_backend() -> str:
+    """The factorisation backend of this installation (``mvtk.fe.sparse_backend``)."""
+    try:
+        from mvtk.fe import sparse_backend
+    except ImportError as err:  # a benchmark run outside the project
+        return f"unknown ({err})"
+    return sparse_backend(detail=True)
 
 
 def _plain(x):

@@ -4,19 +4,23 @@
 1. CSV: a DAQ-style export (metadata lines, time column, units in the header) of
    16 channels x 10 min x 10 kHz (96 M samples, ~1.2 GB of text) read by
    ``mvtk.io.read`` and by ``pandas.read_csv`` (C parser) on the same file.
-2. LVM: a LabVIEW Measurement file (tabs, decimal commas) read by ``mvtk.io.read`` and
-   by ``pandas.read_csv`` with the header lines skipped.
+2. LVM: a LabVIEW Measurement file (tabs, decimal commas) of the same size (16 channels x
+   10 min x 10 kHz) read by ``mvtk.io.read`` and by ``pandas.read_csv`` with the header
+   lines skipped.
 3. UFF 58b: 16 binary float64 records read by ``mvtk.io.read`` and by plain
    ``pyuff.UFF(path).read_sets()``.
 
 Every read runs in a fresh subprocess so its peak resident memory (ru_maxrss minus the
-resident size after imports) is its own. Targets (issue 2): CSV within 1.2x of pandas
-and peak memory under 2x the data size; UFF overhead under 1.2x.
+resident size after imports) is its own; the two readers of a pair alternate, and each
+one's wall and CPU time (all threads) are kept beside the machine's load average.
+Targets: CSV and LVM within 1.2x of pandas (wall and CPU), peak memory under 1.5x the
+data size; UFF overhead under 1.2x.
 
 Usage::
 
     .venv/bin/python benchmarks/bench_io.py                # the full 10-minute file
     .venv/bin/python benchmarks/bench_io.py --minutes 1    # a quicker look
+    .venv/bin/python benchmarks/bench_io.py --only lvm     # one format
 """
 
 from __future__ import annotations
@@ -61,6 +65,10 @@ def worker(kind: str, path: str) -> None:
         pd.read_csv(small_csv, skiprows=HEADER_LINES, header=0)
         mvtk.io.read(small_uff)
         pyuff.UFF(str(small_uff)).read_sets()
+        small_lvm = Path(tmp) / "w.lvm"
+        write_lvm(small_lvm, 2, 100.0, 50, np.random.default_rng(0))
+        mvtk.io.read(small_lvm)
+        pd.read_csv(small_lvm, sep="\t", decimal=",", skiprows=LVM_HEADER_LINES, header=None)
     base = rss_mb()
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -143,11 +151,28 @@ def write_lvm(path: Path, n_ch: int, fs: float, n: int, rng: np.random.Generator
         fh.write("\n".join(head) + "\n")
         for start in range(0, n, chunk):
             m = min(chunk, n - start)
-            block = rng.standard_normal((m, n_ch))
-            text = "\n".join(
-                "\t" + "\t".join(f"{v:.6f}" for v in row) for row in block
-            ).replace(".", ",")
-            fh.write(text + "\n")
+            fh.write(_lvm_lines(rng.standard_normal((m, n_ch))))
+
+
+def _lvm_lines(block: np.ndarray) -> str:
+    """Data lines ``\\t-0,123456\\t1,234567...`` of ``block`` (rows), as LabVIEW writes
+    them with 6 decimals and decimal commas (values clipped to |v| < 10), built with
+    array arithmetic (formatting a 10-minute record value by value takes minutes)."""
+    m, n_ch = block.shape
+    q = np.rint(np.clip(np.abs(block), 0, 9.999999) * 1e6).astype(np.int64)
+    neg = (block < 0) & (q > 0)
+    # per value: tab, sign (0 byte = none, removed below), digit, comma, 6 decimals
+    out = np.zeros((m, n_ch, 10), dtype=np.uint8)
+    out[:, :, 0] = ord("\t")
+    out[:, :, 1] = np.where(neg, ord("-"), 0)
+    out[:, :, 2] = ord("0") + q // 1_000_000
+    out[:, :, 3] = ord(",")
+    for k in range(6):
+        out[:, :, 9 - k] = ord("0") + (q // 10**k) % 10
+    lines = np.concatenate(
+        [out.reshape(m, n_ch * 10), np.full((m, 1), ord("\n"), dtype=np.uint8)], axis=1
+    ).ravel()
+    return lines[lines != 0].tobytes().decode("ascii")
 
 
 def write_uff58b(path: Path, n_rec: int, n: int, fs: float, rng: np.random.Generator) -> None:
@@ -204,6 +229,25 @@ def report(label: str, r: dict, data_mb: float | None = None) -> None:
     print(line)
 
 
+def pair(name: str, kinds: tuple[str, str], labels: tuple[str, str], path: Path,
+         repeats: int, data_mb: float, out: dict) -> None:
+    """Run one mvtk/peer pair, print it and keep its figures and ratios in ``out``."""
+    m, p = best_pair(*kinds, path, repeats)
+    report(labels[0], m, data_mb)
+    report(labels[1], p, data_mb)
+    wall, cpu = m["seconds"] / p["seconds"], m["cpu"] / p["cpu"]
+    print(f"  ratio mvtk/{labels[1].split('.')[0].split()[0]}: wall {wall:.3f}, cpu {cpu:.3f} "
+          f"(target <= 1.2)  [load {os.getloadavg()[0]:.2f}]")
+    for who, r in (("mvtk", m), ("peer", p)):
+        out["figures"][f"{name}_{who}_wall_s"] = r["seconds"]
+        out["figures"][f"{name}_{who}_cpu_s"] = r["cpu"]
+        out["figures"][f"{name}_{who}_peak_mib"] = r["peak_mb"]
+        out["figures"][f"{name}_{who}_peak_x_data"] = r["peak_mb"] / data_mb
+    out["figures"][f"{name}_load_avg_1min"] = os.getloadavg()[0]
+    out["ratios"][f"{name}_mvtk_over_peer_wall"] = wall
+    out["ratios"][f"{name}_mvtk_over_peer_cpu"] = cpu
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--minutes", type=float, default=10.0)
@@ -211,62 +255,58 @@ def main() -> None:
     parser.add_argument("--fs", type=float, default=10_000.0)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--uff-samples", type=int, default=1_000_000)
+    parser.add_argument("--only", default="csv,lvm,uff", help="formats, comma-separated")
+    parser.add_argument("--quick", action="store_true", help="1 minute instead of 10")
     parser.add_argument("--worker", nargs=2, metavar=("KIND", "PATH"))
     args = parser.parse_args()
     if args.worker:
         worker(*args.worker)
         return
+    if args.quick:
+        args.minutes = min(args.minutes, 1.0)
+    only = {x.strip() for x in args.only.split(",")}
+    out: dict = {"figures": {}, "ratios": {}, "peer": "pandas.read_csv (C parser), pyuff"}
     rng = np.random.default_rng(20261122)
     n = int(round(args.minutes * 60 * args.fs))
+    data_mb = args.channels * n * 8 / 2**20
     with tempfile.TemporaryDirectory(prefix="mvtk-bench-") as tmp:
-        csv = Path(tmp) / "big.csv"
-        t0 = time.perf_counter()
-        write_csv(csv, args.channels, args.fs, n, rng)
-        size_mb = os.path.getsize(csv) / 2**20
-        data_mb = args.channels * n * 8 / 2**20
-        print(
-            f"CSV: {args.channels} ch x {n} samples ({args.minutes:g} min at {args.fs:g} Hz), "
-            f"{size_mb:.0f} MiB of text, {data_mb:.0f} MiB as float64 "
-            f"(written in {time.perf_counter() - t0:.0f} s)"
-        )
-        m, p = best_pair("csv-mvtk", "csv-pandas", csv, args.repeats)
-        report("mvtk.io.read", m, data_mb)
-        report("pandas.read_csv", p, data_mb)
-        print(
-            f"  ratio mvtk/pandas: wall {m['seconds'] / p['seconds']:.3f}, "
-            f"cpu {m['cpu'] / p['cpu']:.3f} (target <= 1.2)"
-        )
-        csv.unlink()
+        if "csv" in only:
+            csv = Path(tmp) / "big.csv"
+            t0 = time.perf_counter()
+            write_csv(csv, args.channels, args.fs, n, rng)
+            print(
+                f"CSV: {args.channels} ch x {n} samples ({args.minutes:g} min at {args.fs:g} "
+                f"Hz), {os.path.getsize(csv) / 2**20:.0f} MiB of text, {data_mb:.0f} MiB as "
+                f"float64 (written in {time.perf_counter() - t0:.0f} s)"
+            )
+            pair("csv", ("csv-mvtk", "csv-pandas"), ("mvtk.io.read", "pandas.read_csv"), csv,
+                 args.repeats, data_mb, out)
+            csv.unlink()
+        if "lvm" in only:
+            lvm = Path(tmp) / "big.lvm"
+            t0 = time.perf_counter()
+            write_lvm(lvm, args.channels, args.fs, n, rng)
+            print(
+                f"LVM: {args.channels} ch x {n} samples, decimal commas "
+                f"({os.path.getsize(lvm) / 2**20:.0f} MiB of text, {data_mb:.0f} MiB as "
+                f"float64, written in {time.perf_counter() - t0:.0f} s)"
+            )
+            pair("lvm", ("lvm-mvtk", "lvm-pandas"), ("mvtk.io.read", "pandas.read_csv"), lvm,
+                 args.repeats, data_mb, out)
+            lvm.unlink()
+        if "uff" in only:
+            uff = Path(tmp) / "big.uff"
+            write_uff58b(uff, args.channels, args.uff_samples, args.fs, rng)
+            print(
+                f"UFF 58b: {args.channels} records x {args.uff_samples} float64 samples "
+                f"({os.path.getsize(uff) / 2**20:.0f} MiB)"
+            )
+            pair("uff", ("uff-mvtk", "uff-pyuff"), ("mvtk.io.read", "pyuff read_sets"), uff,
+                 args.repeats, args.channels * args.uff_samples * 8 / 2**20, out)
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from _summary import write_result
 
-        lvm = Path(tmp) / "big.lvm"
-        n_lvm = n // 4
-        write_lvm(lvm, 4, args.fs, n_lvm, rng)
-        print(
-            f"LVM: 4 ch x {n_lvm} samples, decimal commas "
-            f"({os.path.getsize(lvm) / 2**20:.0f} MiB of text)"
-        )
-        m, p = best_pair("lvm-mvtk", "lvm-pandas", lvm, args.repeats)
-        report("mvtk.io.read", m)
-        report("pandas.read_csv", p)
-        print(
-            f"  ratio mvtk/pandas: wall {m['seconds'] / p['seconds']:.3f}, "
-            f"cpu {m['cpu'] / p['cpu']:.3f}"
-        )
-        lvm.unlink()
-
-        uff = Path(tmp) / "big.uff"
-        write_uff58b(uff, args.channels, args.uff_samples, args.fs, rng)
-        print(
-            f"UFF 58b: {args.channels} records x {args.uff_samples} float64 samples "
-            f"({os.path.getsize(uff) / 2**20:.0f} MiB)"
-        )
-        m, p = best_pair("uff-mvtk", "uff-pyuff", uff, args.repeats)
-        report("mvtk.io.read", m)
-        report("pyuff read_sets", p)
-        print(
-            f"  ratio mvtk/pyuff: wall {m['seconds'] / p['seconds']:.3f}, "
-            f"cpu {m['cpu'] / p['cpu']:.3f} (target <= 1.2)"
-        )
+    write_result("io", out)
 
 
 if __name__ == "__main__":

@@ -106,6 +106,7 @@ from ._solvers import (
     estimate_eigen_memory,
     factorize,
     fill_reducing_ordering,
+    sparse_backend,
 )
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
 from ._structure_loads import load_vector
@@ -118,6 +119,7 @@ __all__ = [
     "factorize",
     "Factorization",
     "fill_reducing_ordering",
+    "sparse_backend",
     "estimate_eigen_memory",
     "MemoryEstimate",
     "SparsityPattern",

@@ -113,17 +113,22 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
     T = np.zeros((cap, cap))
     m = V0.shape[1]
     V[:, :m], MV[:, :m] = V0, MV0
-    lo = 0                               # current block: columns lo:m
+    lo = prev = 0                        # current block: columns lo:m, previous prev:lo
     n_steps = 1
     rng = np.random.default_rng(seed + 1)
     while True:
         W = np.asfortranarray(solve(np.ascontiguousarray(MV[:, lo:m])))
         n_steps += 1
         Vm, MVm = V[:, :m], MV[:, :m]
-        # classical Gram-Schmidt twice, as BLAS-3 calls on the Fortran-ordered basis
-        # (numpy's V @ C was 3-4x slower on it)
-        C = _gemm(1.0, MVm, W, trans_a=True)
-        W = _gemm(-1.0, Vm, C, beta=1.0, c=W)
+        # block Gram-Schmidt as BLAS-3 calls on the Fortran-ordered basis (numpy's V @ C
+        # was 3-4x slower on it): first against the current and the previous block (the
+        # three-term recurrence: in exact arithmetic W is M-orthogonal to the older
+        # ones), then against the whole basis (full reorthogonalisation, which removes
+        # what round-off left on the older blocks); half the passes over the basis of
+        # classical Gram-Schmidt twice, and the same projected matrix to round-off
+        C = np.zeros((m, W.shape[1]))
+        C[prev:m] = _gemm(1.0, MV[:, prev:m], W, trans_a=True)
+        W = _gemm(-1.0, V[:, prev:m], C[prev:m], beta=1.0, c=W)
         C2 = _gemm(1.0, MVm, W, trans_a=True)
         W = _gemm(-1.0, Vm, C2, beta=1.0, c=W)
         C += C2
@@ -174,7 +179,7 @@ def block_lanczos(solve, M, n: int, start: np.ndarray, tol: float, max_basis: in
             T = T2
         T[m:m + r, lo:m] = R[:r]
         V[:, m:mn], MV[:, m:mn] = Vn, MVn
-        lo, m = m, mn
+        prev, lo, m = lo, m, mn
 
 
 def _mprod(M, W: np.ndarray) -> np.ndarray:

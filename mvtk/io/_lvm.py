@@ -374,6 +374,22 @@ def read_lvm(
     """
     if decimal is not None and decimal not in (".", ","):
         raise ParameterError(f"read({path}): decimal={decimal!r}; expected '.' or ','")
+    if encoding is None and path.stat().st_size >= _WholeFile.MIN_BYTES:
+        # large file: the header from the first bytes, the last segment's data parsed
+        # straight from the file; anything unusual is read again the line-by-line way
+        head = _head_lines(path)
+        if head is not None:
+            try:
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    out = _read(path, head, _WholeFile(path, head), decimal, fs, units,
+                                quantity, allow_truncated)
+            except (_Retry, FormatError):
+                pass  # the line-by-line path gives the answer (or names the line)
+            else:
+                for w in caught:
+                    warnings.warn(w.message, w.category, stacklevel=2)
+                return out
     raw = path.read_bytes()
     plain = encoding is None and not raw.startswith(b"\xef\xbb\xbf") and b"\r" not in raw
     if plain:
@@ -381,7 +397,7 @@ def read_lvm(
             raw.decode("utf-8")  # validity only: lines are decoded on demand
         except UnicodeDecodeError:
             plain = False
-    if plain:  # the common case: the file's bytes are the buffer (pandas can read the file)
+    if plain:  # the common case: the file's bytes are the buffer
         lines = _Lines(raw)
     else:
         text = _decode(raw, encoding, path).replace("\r\n", "\n")
@@ -390,7 +406,11 @@ def read_lvm(
         lines = _Lines(text.encode("utf-8"))
         del text
     del raw
-    whole = _WholeFile(path, len(lines), plain)
+    return _read(path, lines, None, decimal, fs, units, quantity, allow_truncated)
+
+
+def _read(path, lines, whole, decimal, fs, units, quantity, allow_truncated):
+    """The records of the file whose (leading) lines are ``lines``; see read_lvm."""
     sep = "\t"
     for ln in lines[:64]:
         if ln.startswith("Separator") and len(ln) > len("Separator"):
@@ -401,6 +421,8 @@ def read_lvm(
                 sep = named
             break
     file_header, segments = _split_header(lines, path, sep)
+    if whole is not None:
+        whole.last = segments[-1].index
     fh = {k: [v for v in vals if v != ""] for k, (_, vals) in file_header.items()}
     dec = decimal or (fh.get("decimal_separator") or ["."])[0]
     if dec not in (".", ","):
@@ -444,6 +466,7 @@ def read_lvm(
             and abs(rec["t0"] - t_end) <= 0.01 / rec["fs"]
         ):
             prev["data"] = np.concatenate([prev["data"], rec["data"]], axis=1)
+            prev["n_missing"] = prev["n_missing"] + rec["n_missing"]
             prev["segments"].append(rec["segments"][0])
         else:
             joined.append(rec)
@@ -464,7 +487,7 @@ def read_lvm(
                 rec["units"],
                 rec["quantity"],
                 attrs=clean_attrs(var_attrs),
-                n_missing=np.isnan(rec["data"]).sum(axis=1),
+                n_missing=rec["n_missing"],
             )
         )
     return assemble(variables, clean_attrs(attrs))
@@ -514,42 +537,78 @@ def _start_time(date, time) -> str | None:
     return stamp.isoformat()
 
 
+class _Retry(Exception):
+    """The fast path of a large file does not apply: read it line by line."""
+
+
+#: Bytes read for the header of a large file (its data start within them).
+_HEAD_BYTES = 1 << 18
+
+
+def _head_lines(path: Path):
+    """The complete lines of the file's first bytes when they are plain UTF-8 with ``\\n``
+    line ends (None otherwise: the line-by-line path decodes and normalises)."""
+    with open(path, "rb") as fh:
+        head = fh.read(_HEAD_BYTES)
+    if head.startswith(b"\xef\xbb\xbf") or b"\r" in head:
+        return None
+    if len(head) == _HEAD_BYTES:
+        head = head[: head.rfind(b"\n") + 1]
+    try:
+        head.decode("utf-8")
+    except UnicodeDecodeError:
+        return None
+    return _Lines(head) if head else None
+
+
 class _WholeFile:
-    """When a segment's data run to the end of the file, pandas can parse them straight
-    from the file (multi-threaded for large files) instead of from a joined string."""
+    """A large file whose last segment's data run from within its first bytes to its end:
+    pandas' C reader parses them straight from the file, in parallel chunks, into one
+    array (``_text.read_columns``); the line-by-line path reads files that do not fit this.
+    """
 
     MIN_BYTES = 5 * 2**20
 
-    def __init__(self, path: Path, n_lines: int, line_numbers_match: bool):
+    def __init__(self, path: Path, head: _Lines):
         self.path = path
-        self.n_lines = n_lines
-        self.usable = line_numbers_match and path.stat().st_size >= self.MIN_BYTES
+        self.head = head
+        self.last = None  # index of the last segment, set when the header is split
 
-    def parse(self, seg, sep: str, dec: str, n_cols: int, cols: list[int]):
-        from ._text import whole_file_fits
+    def parse(self, seg, sep: str, dec: str, n_cols: int, cols: list[int], rows_hint=None):
+        """``(columns cols, rows)`` float64 array of the segment's data and the NaN count
+        per column, with ``seg.stop`` set; None for a segment inside the first bytes."""
+        from ._text import read_columns
 
-        n_rows = seg.stop - seg.first
-        if not (self.usable and seg.stop == self.n_lines and sep in "\t,; "):
+        if seg.index != self.last:
             return None
-        if not whole_file_fits(n_cols * n_rows * 8):
-            return None
-        try:
-            df = pd.read_csv(
-                self.path,
-                sep=sep,
-                decimal=dec,
-                header=None,
-                skiprows=seg.first,
-                engine="c",
-                encoding="utf-8",
-                na_values=[""],
-                keep_default_na=False,
-            )
-            if df.shape != (n_rows, n_cols) and df.shape != (n_rows, n_cols + 1):
-                return None
-            return df.iloc[:, cols].to_numpy(dtype=np.float64).T
-        except (ValueError, TypeError, pd.errors.ParserError, pd.errors.EmptyDataError):
-            return None  # the line-by-line path names the bad line
+        if seg.first >= len(self.head):
+            raise _Retry
+        got = read_columns(
+            self.path,
+            int(self.head.starts[seg.first]),
+            n_cols,
+            cols,
+            # every line is a row (a blank one gives NaN: the line-by-line path names
+            # it); quotes are not special in LVM files
+            dict(sep=sep, decimal=dec, na_values=[""], keep_default_na=False,
+                 skip_blank_lines=False, encoding="utf-8", quoting=3),
+            extra="ignore",
+            rows_hint=rows_hint,
+        )
+        if got is None:
+            raise _Retry
+        arr, n_rows, nans = got
+        seg.stop = seg.first + n_rows
+        return arr, nans
+
+
+def _declared_rows(seg) -> int | None:
+    """The largest ``Samples`` value of the segment header (None when absent or unreadable;
+    the header check names a bad value)."""
+    try:
+        return max(int(v) for v in seg.header["samples"][1] if v != "")
+    except (KeyError, ValueError):
+        return None
 
 
 def _read_segment(
@@ -596,9 +655,14 @@ def _read_segment(
     y_rows = [cols.index(k) for k in ypos]
     # fast path for large files: one pandas pass over the file; accepted only when every
     # line was complete (a short line or a gap gives NaN: the checks below name the line)
-    arr = whole.parse(seg, sep, dec, n_cols, cols)
-    if arr is not None and np.isnan(arr[y_rows]).any():
-        arr = None
+    arr = n_missing = None
+    if whole is not None:
+        got = whole.parse(seg, sep, dec, n_cols, cols, _declared_rows(seg))
+        if got is not None:
+            arr, nans = got
+            n_missing = nans[y_rows]
+            if n_missing.any():
+                raise _Retry
     if arr is None:
         # every data line has n_cols fields, or one more (Comment text / trailing separator)
         counts = lines.sep_counts(seg.first, seg.stop, sep)
@@ -625,8 +689,13 @@ def _read_segment(
         arr = _parse_block(block_text, sep, dec, cols, n_cols)
     if arr is None or arr.shape[1] != seg.stop - seg.first:
         _diagnose(lines, seg, sep, dec, cols, col_names, path)
-    data = arr[[cols.index(k) for k in ypos]]
+    if y_rows == list(range(y_rows[0], y_rows[0] + n_ch)):
+        data = arr[y_rows[0] : y_rows[0] + n_ch]  # a view: no copy of a large block
+    else:
+        data = arr[y_rows]
     xs = arr[[cols.index(k) for k in xpos]] if xpos else np.empty((0, data.shape[1]))
+    if n_missing is None:
+        n_missing = np.isnan(data).sum(axis=1)
     n = data.shape[1]
 
     # samples declared
@@ -786,6 +855,7 @@ def _read_segment(
         "fs": float(rate),
         "t0": float(t0 or 0.0),
         "data": data,
+        "n_missing": n_missing,
         "segments": [seg.index],
         "attrs": seg_attrs,
         "spectrum": spectrum,

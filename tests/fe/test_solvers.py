@@ -235,3 +235,22 @@ def test_uncoupled_zeros_are_dropped_by_kind_not_by_value(plate):
     assert full.nnz_storage < 0.6 * S._superlu(K, S.fill_reducing_ordering(K))[1].nnz
     b = np.random.default_rng(3).standard_normal(plate.n_dof)
     np.testing.assert_allclose(K @ full.solve(b), b, atol=1e-8 * np.abs(b).max())
+
+
+def test_sparse_backend_names_what_factorize_uses(monkeypatch):
+    """sparse_backend() (for timings and report provenance) against the backend that
+    factorize actually picks for a positive definite matrix, with and without CHOLMOD
+    and with the environment override."""
+    A = sp.diags([4.0] * 200) + sp.diags([-1.0] * 199, 1) + sp.diags([-1.0] * 199, -1)
+    A = A.tocsc()
+    monkeypatch.delenv("MVTK_SPARSE_BACKEND", raising=False)
+    assert fe.sparse_backend() == fe.factorize(A).backend
+    assert fe.sparse_backend(detail=True).startswith(fe.sparse_backend() + " (")
+    monkeypatch.setattr(S, "_cholmod_module", lambda: None)
+    assert fe.sparse_backend() == fe.factorize(A).backend == "superlu"
+    assert "scipy" in fe.sparse_backend(detail=True)
+    monkeypatch.setenv("MVTK_SPARSE_BACKEND", "superlu")
+    assert fe.sparse_backend() == "superlu"
+    monkeypatch.setenv("MVTK_SPARSE_BACKEND", "bogus")
+    with pytest.raises(ParameterError, match="MVTK_SPARSE_BACKEND"):
+        fe.sparse_backend()

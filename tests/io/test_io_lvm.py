@@ -336,3 +336,37 @@ def test_file_and_memory_parse_paths_agree(tmp_path, signal, monkeypatch, xcols)
     path.write_text("\n".join(lines) + "\n")
     with pytest.raises(FormatError, match=rf"line {len(lines) - 2}: 2 fields; expected 3"):
         mio.read(path)
+
+
+@pytest.mark.parametrize("segments", [1, 3])
+def test_parallel_chunks_give_the_written_values(tmp_path, rng, monkeypatch, segments):
+    """Large-file path (header from the first bytes, data in parallel chunks) on a fresh
+    file split into many chunks: the values written, and the same Dataset as the
+    line-by-line path; a file it cannot take (a later segment beyond the first bytes, a
+    Comment on a later line) is read again line by line to the same result."""
+    import mvtk.io._lvm as lvm
+    import mvtk.io._text as text
+
+    data = np.round(rng.normal(size=(3, 1500)), 6)
+    path = _lvm(tmp_path, data, dec=",", names=("a", "b", "c"), units=("g", "g", "N"),
+                segments=segments, xcols="One")
+    slow = mio.read(path)
+    used, reads = [], []
+    real = text.read_columns
+    monkeypatch.setattr(text, "read_columns", lambda *a, **k: used.append(1) or real(*a, **k))
+    real_read = lvm._read
+    monkeypatch.setattr(lvm, "_read", lambda *a: reads.append(1) or real_read(*a))
+    monkeypatch.setattr(lvm._WholeFile, "MIN_BYTES", 0)
+    monkeypatch.setattr(lvm, "_HEAD_BYTES", 2048)
+    monkeypatch.setattr(text, "MIN_CHUNK_BYTES", 1000)
+    monkeypatch.setattr(text, "CHUNK_BYTES", 1000)
+    fast = mio.read(path)
+    assert used and len(reads) == (1 if segments == 1 else 2)  # 2: read again
+    np.testing.assert_array_equal(fast["time_history"].values, data)
+    xr.testing.assert_identical(slow, fast)
+    lines = path.read_text().splitlines()
+    lines[-100] += "\tlate comment"
+    path.write_text("\n".join(lines) + "\n")
+    reads.clear()
+    xr.testing.assert_identical(mio.read(path), slow)
+    assert len(reads) == 2

@@ -273,30 +273,36 @@ def _big_csv(tmp_path, rng, trailing=False, nan_at=None):
 
 
 @pytest.mark.parametrize("trailing", [False, True])
-def test_whole_file_and_chunked_paths_agree(tmp_path, rng, monkeypatch, trailing):
+def test_parallel_and_serial_paths_agree(tmp_path, rng, monkeypatch, trailing):
     import mvtk.io._text as text
 
     path, data = _big_csv(tmp_path, rng, trailing=trailing)
     assert path.stat().st_size > 5 * 2**20
     calls = []
-    real = text._read_whole
-    monkeypatch.setattr(text, "_read_whole", lambda *a: calls.append(1) or real(*a))
-    whole = mio.read(path)["time_history"]
-    assert calls, "the whole-file path was expected for a file that fits the memory budget"
-    monkeypatch.setattr(text, "whole_file_fits", lambda nbytes: False)
-    calls.clear()
-    chunked = mio.read(path)["time_history"]
-    assert not calls
-    np.testing.assert_array_equal(whole.values, data.T)
-    xr.testing.assert_identical(whole, chunked)
+    real = text.read_columns
+    monkeypatch.setattr(text, "read_columns", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(text, "CHUNK_BYTES", 2**20)  # several chunks per thread
+    parallel = mio.read(path)["time_history"]
+    assert calls, "the parallel path was expected for a file with plain line ends"
+    monkeypatch.setattr(text, "read_columns", lambda *a, **k: None)  # the serial path
+    serial = mio.read(path)["time_history"]
+    np.testing.assert_array_equal(parallel.values, data.T)
+    xr.testing.assert_identical(parallel, serial)
 
 
-def test_memory_budget(monkeypatch):
+def test_parallel_parse_known_values(tmp_path, rng):
+    """read_columns against the values written, and its refusal of a non-number."""
     import mvtk.io._text as text
 
-    monkeypatch.setattr(text, "available_memory", lambda: 1000 * 2**20)
-    assert text.whole_file_fits(100 * 2**20)  # 3 x 100 MiB <= 0.5 x 1000 MiB
-    assert not text.whole_file_fits(200 * 2**20)
-    monkeypatch.setattr(text, "available_memory", lambda: None)
-    assert text.whole_file_fits(300 * 2**20) and not text.whole_file_fits(400 * 2**20)
-    assert text.available_memory is not None
+    path, data = _big_csv(tmp_path, rng)
+    head = path.read_bytes()[:4096]
+    got = text.read_columns(path, head.index(b"\n") + 1, 9, list(range(1, 9)),
+                            {"sep": ",", "decimal": "."})
+    block, n_rows, nans = got
+    assert n_rows == data.shape[0] and not nans.any()
+    np.testing.assert_array_equal(block, data.T)
+    # a bad value makes the parallel parse give up (the serial path names the line)
+    lines = path.read_text().splitlines()
+    lines[len(lines) // 2] = lines[len(lines) // 2].replace(",", ",x", 1)
+    path.write_text("\n".join(lines) + "\n")
+    assert text.read_columns(path, head.index(b"\n") + 1, 9, [1], {"sep": ","}) is None
