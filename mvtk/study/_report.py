@@ -1,4 +1,8 @@
-"""The study report: paper-shaped tables, figures, pass/fail checks, provenance."""
+"""The study report: tables, figures, pass/fail checks and provenance of a study run.
+
+Every sentence is built from the study's own content; published values appear only
+where the study declares them in ``[references]``.
+"""
 
 from __future__ import annotations
 
@@ -22,6 +26,37 @@ __all__ = ["build_report", "study_checks"]
 
 def _ref(res: StudyResult, key: str, default=None):
     return (res.study.config.get("references") or {}).get(key, default)
+
+
+def _has_refs(res: StudyResult, *keys: str) -> bool:
+    """True when the study's ``[references]`` give every one of ``keys``."""
+    refs = res.study.config.get("references") or {}
+    return bool(keys) and all(refs.get(k) is not None for k in keys)
+
+
+def _refs_name(res: StudyResult) -> str:
+    """How the text names the study's references: their ``source``, else "the references"."""
+    return str(_ref(res, "source") or "the references")
+
+
+def _title(base: str, res: StudyResult, tables: str, *keys: str) -> str:
+    """``base``, with `` (paper Tables ...)`` only when the study gives those references."""
+    return f"{base} (reference {tables})" if _has_refs(res, *keys) else base
+
+
+def _list_modes(modes: list[int]) -> str:
+    """``[1, 2]`` -> "modes 1-2", ``[3]`` -> "mode 3", ``[1, 3, 4]`` -> "modes 1, 3, 4"."""
+    if len(modes) == 1:
+        return f"mode {modes[0]}"
+    if modes == list(range(modes[0], modes[-1] + 1)):
+        return f"modes {modes[0]}-{modes[-1]}"
+    return "modes " + ", ".join(map(str, modes))
+
+
+def _not_configured(res: StudyResult, stage: str) -> bool:
+    """True when the study file does not ask for ``stage`` (its section is left out)."""
+    return stage not in res.results and str(
+        res.unavailable.get(stage, "")).startswith("not configured")
 
 
 def _stage_missing(sec, res: StudyResult, stage: str) -> bool:
@@ -59,7 +94,7 @@ def study_checks(res: StudyResult) -> list[Check]:
                 checks.append(Check(f"identified zeta{i + 1} at {fn:.1f} Hz vs SYNTHETIC truth",
                                     z, truth_pair[0] / (2 * w) + truth_pair[1] * w / 2,
                                     tol["identified_zeta_rel"], "",
-                                    source="data/make_smart_beam_data.py"))
+                                    source="study [truth] (simulated specimen)"))
     env = dmp.get("envelope")
     zref = _ref(res, "zeta", [])
     if env and zref:
@@ -83,7 +118,7 @@ def study_checks(res: StudyResult) -> list[Check]:
             if path in truth:
                 checks.append(Check(f"updated {path} vs SYNTHETIC truth", value,
                                     float(truth[path]), tol["truth_param_rel"], "",
-                                    source="data/make_smart_beam_data.py"))
+                                    source="study [truth] (simulated specimen)"))
     unc = res.results.get("uncertainty")
     if unc and unc["statistics"]:
         s1 = unc["statistics"][0]
@@ -114,7 +149,7 @@ def study_checks(res: StudyResult) -> list[Check]:
                                     tol["ppf_settling_s"], 0.0, "s", kind="upper",
                                     source="study tolerance"))
             if "peak_voltage_V" in row:
-                checks.append(Check(f"{name} peak voltage within the PIC 151 limit",
+                checks.append(Check(f"{name} peak voltage within the actuator limit",
                                     row["peak_voltage_V"], ctl["actuator_limit_v"], 0.0, "V",
                                     kind="upper", source="study control.actuator_limit_v"))
             stable = row.get("stable")
@@ -177,9 +212,14 @@ def _truth_rayleigh(res: StudyResult) -> tuple[float, float] | None:
 def _section_run(rep: Report, res: StudyResult) -> None:
     sec = rep.section("Study and run summary")
     if res.study.synthetic:
-        sec.note("The measurement data of this study are SYNTHETIC: simulated by "
-                 "data/make_smart_beam_data.py from a 'truth' beam, not measured. The "
-                 "paper's values are shown next to mvtk's own numbers for comparison.")
+        parts = ["The measurement data of this study are SYNTHETIC (the study file says "
+                 "so: [study] synthetic = true): simulated, not measured."]
+        if res.study.config.get("truth"):
+            parts.append("The simulated specimen's own values ([truth]) are shown next to "
+                         "mvtk's numbers and checked.")
+        if res.study.config.get("references"):
+            parts.append(f"The values of {_refs_name(res)} are shown for comparison.")
+        sec.note(" ".join(parts))
     sec.text(f"Study: {res.study.name} ({res.study.path.name}).")
     df = res.to_dataframe()
     df = df[df["stage"] != "report"]
@@ -188,6 +228,8 @@ def _section_run(rep: Report, res: StudyResult) -> None:
 
 
 def _section_measurements(rep: Report, res: StudyResult) -> None:
+    if _not_configured(res, "ingest"):
+        return
     sec = rep.section("Measurements")
     if _stage_missing(sec, res, "ingest"):
         return
@@ -198,7 +240,9 @@ def _section_measurements(rep: Report, res: StudyResult) -> None:
 def _section_damping(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_decay, plot_frf
 
-    sec = rep.section("Damping identification (paper Table 3)")
+    if _not_configured(res, "damping"):
+        return
+    sec = rep.section(_title("Damping identification", res, "Table 3", "half_power_alpha"))
     if _stage_missing(sec, res, "damping"):
         return
     d = res.results["damping"]
@@ -228,9 +272,13 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
             w = 2 * np.pi * hp["fn_hz"][i]
             row["zeta SYNTHETIC truth"] = truth_pair[0] / (2 * w) + truth_pair[1] * w / 2
         rows.append(row)
+    by_test: dict[str, list[int]] = {}
+    for i, t in enumerate(tests):
+        by_test.setdefault(str(t), []).append(i + 1)
+    origin = "; ".join(f"{_list_modes(m)} from the {t} test" for t, m in by_test.items())
     sec.table(pd.DataFrame(rows), "damping_per_mode",
-              "Identified damping per mode (modes 1-2 from the long impact test, the "
-              "higher ones from the short broadband test)", passed_column=None)
+              "Identified damping per mode" + (f" ({origin})" if origin else ""),
+              passed_column=None)
     rows = []
     ch = d.get("rayleigh_chowdhury", {})
     ls = d.get("rayleigh_least_squares", {})
@@ -242,13 +290,16 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
              f"all {ls.get('n_modes', '')} identified modes", ls.get("error", "")),
             ("chowdhury", "Chowdhury", anchors, ch.get("error", ch.get("note", "")))):
         r = d.get(f"rayleigh_{meth}", {})
-        rows.append({"method": label, "modes used": used,
-                     "alpha [1/s]": r.get("alpha", float("nan")),
-                     "beta [s]": r.get("beta", float("nan")),
-                     "alpha paper": _ref(res, f"{meth}_alpha", float("nan")),
-                     "beta paper": _ref(res, f"{meth}_beta", float("nan")),
-                     "note": note})
-    sec.table(pd.DataFrame(rows), "table3_rayleigh", "Table 3: Rayleigh alpha and beta",
+        row = {"method": label, "modes used": used,
+               "alpha [1/s]": r.get("alpha", float("nan")),
+               "beta [s]": r.get("beta", float("nan"))}
+        if _has_refs(res, "half_power_alpha"):
+            row["alpha paper"] = _ref(res, f"{meth}_alpha", float("nan"))
+            row["beta paper"] = _ref(res, f"{meth}_beta", float("nan"))
+        row["note"] = note
+        rows.append(row)
+    sec.table(pd.DataFrame(rows), "table3_rayleigh",
+              _title("Rayleigh alpha and beta", res, "Table 3", "half_power_alpha"),
               passed_column=None)
     if "error" in ch:
         sec.text("Chowdhury pair not computed: its anchor rule (mode 1 and the lowest mode at "
@@ -259,15 +310,16 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
         pair = ch["pairing"]
         sec.text(f"Chowdhury pair: anchors at identified modes {ch['anchors'][0] + 1} and "
                  f"{ch['anchors'][1] + 1}; target cumulative effective mass "
-                 f"{ch['target_mass']:g} (paper), used {ch['target_used']:.3f}; the "
+                 f"{ch['target_mass']:g} (study), used {ch['target_used']:.3f}; the "
                  f"identified modes hold {ch['mass_reached']:.3f} of the effective mass (uz) "
                  "of the FE model used for the SE (updated when updating ran), each paired "
                  "with the FE mode nearest in frequency. "
-                 + ("That is below the paper's target (and below EN 1998's 0.90), so the "
+                 + ("That is below the target (and below EN 1998's 0.90), so the "
                     "upper anchor is the mode at which the highest fraction reached is "
                     "attained. " if ch["note"] else "")
-                 + "The paper's Chowdhury pair rests on damping ratios the paper does not "
-                 "give, so it is not expected to be reproduced.")
+                 + (f"The Chowdhury pair of {_refs_name(res)} rests on damping ratios "
+                    "that are not published with it, so it is not expected to be "
+                    "reproduced." if _has_refs(res, "chowdhury_alpha") else ""))
         sec.table(pd.DataFrame({
             "identified mode": [a + 1 for a in range(len(pair["fe_mode"]))],
             "FE mode": pair["fe_mode"], "FE fn_hz": pair["fe_fn_hz"],
@@ -327,7 +379,9 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
 def _section_fe(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_mode_shapes
 
-    sec = rep.section("FE model and updating (paper Table 2)")
+    if _not_configured(res, "fe"):
+        return
+    sec = rep.section(_title("FE model and updating", res, "Table 2", "fe_fn_hz"))
     if _stage_missing(sec, res, "fe"):
         return
     fe = res.results["fe"]
@@ -353,7 +407,8 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         cols["paper FE"] = _ref(res, "fe_fn_hz")
     if targets:
         sec.table(frequency_table(cols, "experiment"), "table2_frequencies",
-                  "Table 2: FE vs experiment eigenfrequencies [Hz] (errors in % of the "
+                  ("Table 2: " if _has_refs(res, "fe_fn_hz") else "")
+                  + "FE vs experiment eigenfrequencies [Hz] (errors in % of the "
                   "experiment)", passed_column=None)
         text = _model_form_text(res)
         if text:
@@ -370,8 +425,8 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         k = min(len(up["model_fn_hz"]), len(modes))
         modes["fn_hz updated"] = np.nan
         modes.loc[: k - 1, "fn_hz updated"] = up["model_fn_hz"][:k]
-    sec.table(modes, "fe_modes", "Lowest modes of the FE model (modes the paper does not "
-              "list are shown too)", passed_column=None)
+    sec.table(modes, "fe_modes", f"The {len(modes)} lowest modes of the FE model",
+              passed_column=None)
     if up:
         truth = res.study.config.get("truth") or {}
         prm = pd.DataFrame({"parameter": up["parameters"], "initial": up["initial_values"],
@@ -454,7 +509,9 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
 
 
 def _section_se(rep: Report, res: StudyResult) -> None:
-    sec = rep.section("Super element (paper Tables 4 and 5)")
+    if _not_configured(res, "reduction"):
+        return
+    sec = rep.section(_title("Super element", res, "Tables 4 and 5", "fe4_fn_hz", "se4_fn_hz"))
     if _stage_missing(sec, res, "reduction"):
         return
     r = res.results["reduction"]
@@ -466,20 +523,26 @@ def _section_se(rep: Report, res: StudyResult) -> None:
         if fe_s and se_s and len(sizes) == len(fe_s):
             sizes["paper FE"] = fe_s
             sizes["paper SE"] = se_s
-        sec.table(sizes, "table4_sizes", "Table 4: FE vs SE model sizes", passed_column=None)
+        sec.table(sizes, "table4_sizes", ("Table 4: " if fe_s and se_s else "")
+                  + "FE vs SE model sizes", passed_column=None)
     m = pd.DataFrame(r["modes"])
     fe4, se4 = _ref(res, "fe4_fn_hz"), _ref(res, "se4_fn_hz")
     if fe4 and se4 and len(fe4) >= len(m):
         m["paper FE"] = fe4[: len(m)]
         m["paper SE"] = se4[: len(m)]
-    sec.text("A truncated Craig-Bampton SE can only be stiffer than its FE model "
-             "(Rayleigh-Ritz bound). The paper's SE (SAMCEF) is 1.7-4.8 % stiffer than its FE "
-             "model; with the same size (5 retained nodes, 10 fixed-interface modes) mvtk's SE "
-             "is much closer, as the table shows: a reduction error of a few percent is not "
-             "inherent to the method.")
-    sec.table(m, "table5_fe_vs_se", "Table 5: FE vs SE eigenfrequencies [Hz]; error_pct = "
-              "100 (SE - FE) / FE, error_pct_of_se = 100 (SE - FE) / SE (the paper's "
-              "convention)", passed_column=None)
+    n_ret = len(r["retained_nodes"])
+    n_fix = res.study.config["reduction"].get("n_modes")
+    text = (f"Craig-Bampton super element with {n_ret} retained nodes and {n_fix} "
+            "fixed-interface modes. A truncated Craig-Bampton SE can only be stiffer than "
+            "its FE model (Rayleigh-Ritz bound); its eigenfrequency errors are in the table.")
+    if fe4 and se4:
+        pub = 100 * (np.asarray(se4, float) / np.asarray(fe4, float) - 1)
+        text += (f" The published SE of {_refs_name(res)} is {pub.min():.2g}-{pub.max():.2g} "
+                 "% stiffer than its own FE model.")
+    sec.text(text)
+    sec.table(m, "table5_fe_vs_se", ("Table 5: " if fe4 and se4 else "")
+              + "FE vs SE eigenfrequencies [Hz]; error = 100 (SE - FE) / FE, error of SE = "
+              "100 (SE - FE) / SE", passed_column=None)
     if r.get("static"):
         st = pd.DataFrame(r["static"])
         num = st.select_dtypes("number")
@@ -495,6 +558,8 @@ def _section_se(rep: Report, res: StudyResult) -> None:
 def _section_control(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_spectra, plot_time_responses
 
+    if _not_configured(res, "control"):
+        return
     sec = rep.section("Active vibration control on the SE")
     if _stage_missing(sec, res, "control"):
         return
@@ -502,37 +567,40 @@ def _section_control(rep: Report, res: StudyResult) -> None:
     cfg = res.study.config["control"]
     act = (res.results.get("reduction") or {}).get("actuator")
     if act:
+        eq7 = act.get("paper_eq7_moment_per_volt", float("nan"))
+        eq7_text = (f" ({_refs_name(res)}, printed eq. 7: {eq7:.5g} N m/V)"
+                    if res.study.config.get("references") and np.isfinite(eq7) else "")
         sec.text(
             f"Actuator input: the voltage of patch '{act['name']}' (V). Moment per volt "
-            f"(paper eqs. 3-6 integrated over the steel/epoxy/PIC 151 stack): "
-            f"{act['moment_per_volt_per_m']:.5g} N m/(V m), times the patch width "
-            f"{1e3 * act['width_m']:.4g} mm = {act['moment_per_volt']:.5g} N m/V (the paper's "
-            f"printed eq. 7: {act['paper_eq7_moment_per_volt']:.5g} N m/V). As in the paper "
-            "(moments at its nodes 2 and 3) the moment pair acts on the rotations of the two "
-            "retained actuator-edge nodes, where the super element represents it exactly "
-            "(constraint modes). Static tip deflection per volt on the full FE model: "
+            "(pin-force model, Crawley & de Luis 1987, integrated over the layers under the "
+            f"patch): {act['moment_per_volt_per_m']:.5g} N m/(V m), times the patch width "
+            f"{1e3 * act['width_m']:.4g} mm = {act['moment_per_volt']:.5g} N m/V{eq7_text}. "
+            "The moment pair acts on the rotations of the two retained actuator-edge nodes, "
+            "where the super element represents it exactly (constraint modes). Static tip "
+            "deflection per volt on the full FE model: "
             f"{1e6 * act['tip_per_volt_nodes_m']:.4g} um/V with the moments at the two nodes, "
             f"{1e6 * act['tip_per_volt_edge_lines_m']:.4g} um/V with the same moments spread "
             "along the patch edge lines; SE plant DC gain "
             f"{1e6 * act['tip_per_volt_plant_m']:.4g} um/V ({act['plant_modes']} SE eigenmodes "
             f"up to {act['plant_fn_max_hz']:.0f} Hz plus the static residual of the others). "
-            f"Actuator limit: +-{c['actuator_limit_v']:g} V (PIC 151, 0.25 mm: the "
-            "-0.4 kV/mm field limit against the poling direction, used for both signs).")
+            f"Actuator limit: ±{c['actuator_limit_v']:g} V ([control] actuator_limit_v).")
+    lyap = [k["name"] for k in cfg.get("controllers", [])
+            if str(k.get("type", "")).startswith("Lyapunov")]
     sec.text("The SE plant is released from its first mode with a tip displacement of "
              f"{cfg['initial_tip_displacement_m']:g} m and the controllers are switched on "
-             "at t = 0. Peak voltage in V and the equivalent edge moment in N m (the paper "
-             "quotes moments); closed-loop zeta of the linear controllers is the "
-             "small-signal one (command below the limit). Settling time: after it the tip "
-             "displacement stays "
-             f"within {100 * c['settle_band']:g} % of its initial amplitude. The Lyapunov "
-             "controller is the velocity form with a boundary layer (mvtk.control."
-             "LyapunovBangBang); being nonlinear it has no closed-loop poles (zeta shown as –).")
+             "at t = 0. Peak voltage in V and the equivalent edge moment in N m; closed-loop "
+             "zeta of the linear controllers is the small-signal one (command below the "
+             "limit). Settling time: after it the tip displacement stays "
+             f"within {100 * c['settle_band']:g} % of its initial amplitude."
+             + (f" {', '.join(lyap)}: the velocity form of the Lyapunov controller with a "
+                "boundary layer (mvtk.control.LyapunovBangBang); being nonlinear it has no "
+                "closed-loop poles (zeta shown as –)." if lyap else ""))
     df = pd.DataFrame(c["metrics"])
     sec.table(df, "controller_comparison", "Controller comparison", passed_column=None)
     ps, os_ = _ref(res, "ppf_settling_s"), _ref(res, "other_settling_s")
     if ps is not None:
-        sec.text(f"Paper (section 4.3): PPF settles in about {ps} s, SRF and Lyapunov in "
-                 f"about {os_} s.")
+        sec.text(f"{_refs_name(res)}: PPF settles in about {ps} s, the other controllers "
+                 f"in about {os_} s.")
     arr = res.arrays.get("control")
     if arr is not None:
         t = arr["time"].values
@@ -620,10 +688,9 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
         worst = pred.loc[pred["df_pct"].abs().idxmax()]
         sec.text(f"Model-form check: {len(pred)} mode(s) not used as targets are predicted "
                  f"within {abs(worst['df_pct']):.2g} % (worst: test mode "
-                 f"{int(worst['test_mode'])} at {worst['fn_test_hz']:.2f} Hz). The "
-                 "nominal model lacks what the specimen has (sensor mass, bolted clamp, sheet "
-                 "thickness, finer mesh: data/smart_beam/README.md for the SYNTHETIC case); "
-                 "modes that load those details most are predicted worst.")
+                 f"{int(worst['test_mode'])} at {worst['fn_test_hz']:.2f} Hz). Whatever "
+                 "the specimen has and the model lacks (added masses, joints, thickness "
+                 "tolerances, mesh) shows most in the modes that load those details.")
     dofs = pd.DataFrame(cor["dofs"])
     dofs = dofs.drop(columns=[c for c in ("index",) if c in dofs.columns])
     sec.table(dofs, "correlation_dofs", "Sensor mapping and COMAC per test DOF",
