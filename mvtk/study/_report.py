@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from ..report import Report, collect_provenance
+from .._format import parameter_unit
+from ..report import Report, collect_provenance, display_checks
 from ..validation import Check, check_table, frequency_table
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -429,7 +430,9 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
               passed_column=None)
     if up:
         truth = res.study.config.get("truth") or {}
-        prm = pd.DataFrame({"parameter": up["parameters"], "initial": up["initial_values"],
+        prm = pd.DataFrame({"parameter": up["parameters"],
+                            "unit": [parameter_unit(p) for p in up["parameters"]],
+                            "initial": up["initial_values"],
                             "updated": up["values"], "std": up["std"],
                             "at bound": up["at_bound"]})
         if truth:
@@ -494,7 +497,10 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
     sec.table(pd.DataFrame(u["statistics"]), "uncertainty_statistics",
               "Sampled eigenfrequency statistics per mode [Hz] (std with ddof = 1, "
               "cov = std / mean)", passed_column=None)
-    sec.table(pd.DataFrame(u["parameters"]), "uncertainty_inputs",
+    inputs = pd.DataFrame(u["parameters"])
+    if "path" in inputs:
+        inputs.insert(1, "unit", [parameter_unit(p) for p in inputs["path"]])
+    sec.table(inputs, "uncertainty_inputs",
               "Input scatter (mean and std in SI units) and log-sensitivities of the "
               "eigenfrequencies", passed_column=None)
     for w in u.get("warnings", []):
@@ -702,6 +708,76 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
         sec.figure(_png(b64), captions.get(name, name))
 
 
+def _stage_warnings(res: StudyResult) -> list[str]:
+    """Warnings the stages raised, and results the stages marked as not reliable."""
+    out: list[str] = []
+    for stage, r in res.results.items():
+        if not isinstance(r, dict):
+            continue
+        for key in sorted(k for k in r if str(k).endswith("warnings")):
+            out += [f"{stage}: {w}" for w in (r[key] or [])]
+        for sub in r.values():   # e.g. damping.rayleigh_chowdhury.warnings
+            if isinstance(sub, dict):
+                out += [f"{stage}: {w}" for w in (sub.get("warnings") or [])]
+    mod = res.results.get("modal")
+    if mod:
+        t = pd.DataFrame(mod["table"])
+        if "reliable" in t:
+            for _, row in t[~t["reliable"].astype(bool)].iterrows():
+                out.append(f"modal: identified mode {int(row['mode'])} at "
+                           f"{row['fn_hz']:.4g} Hz is not reliable: {row.get('reason', '')}")
+    cor = res.results.get("correlation")
+    if cor:
+        pairs = pd.DataFrame(cor["pairs"])
+        for _, p in pairs.iterrows():
+            if not bool(p.get("paired", True)):
+                out.append(f"correlation: test mode {p['test_mode']} has no FE partner"
+                           + (f" ({p['reason']})" if p.get("reason") else ""))
+    up = res.results.get("updating")
+    if up:
+        for name, at in zip(up["parameters"], up.get("at_bound", [])):
+            if at:
+                out.append(f"updating: {name} ended at a bound of its range")
+        if up.get("identifiable") is False:
+            out.append("updating: the parameters are not identifiable from the targets")
+    return list(dict.fromkeys(out))
+
+
+#: two estimates of one mode's damping ratio from different sections that differ by more
+#: than this factor are listed as an inconsistency in the summary
+ZETA_FACTOR = 1.5
+
+
+def _inconsistencies(res: StudyResult) -> list[str]:
+    """Disagreements between sections: one mode's frequency and damping from the
+    single-point tests (half-power) and the multi-point test (pLSCF + LSFD)."""
+    hp = (res.results.get("damping") or {}).get("half_power")
+    mod = res.results.get("modal")
+    if not hp or not mod:
+        return []
+    tol = res.study.config["checks"]["identified_fn_rel"]
+    t = pd.DataFrame(mod["table"])
+    f_m, z_m = t["fn_hz"].to_numpy(float), t["zeta"].to_numpy(float)
+    out = []
+    tests = hp.get("test", ["impact"] * len(hp["fn_hz"]))
+    for i, (fn, z, test) in enumerate(zip(hp["fn_hz"], hp["zeta"], tests)):
+        if not np.isfinite([fn, z]).all() or not len(f_m):
+            continue
+        j = int(np.argmin(np.abs(f_m - fn)))
+        if abs(f_m[j] / fn - 1) > 0.05:
+            continue   # not the same mode
+        if abs(f_m[j] / fn - 1) > tol:
+            out.append(f"mode {i + 1}: {fn:.5g} Hz from the {test} test (half-power) vs "
+                       f"{f_m[j]:.5g} Hz from the multi-point test ({100 * (f_m[j] / fn - 1):+.2g}"
+                       f" %, more than the {100 * tol:g} % identification tolerance)")
+        if z > 0 and z_m[j] > 0 and max(z / z_m[j], z_m[j] / z) > ZETA_FACTOR:
+            out.append(f"mode {i + 1} ({fn:.4g} Hz): damping ratio {z:.3g} from the {test} test "
+                       f"(half-power) vs {z_m[j]:.3g} from the multi-point test (pLSCF): a "
+                       f"factor {max(z / z_m[j], z_m[j] / z):.2g} apart (more than "
+                       f"{ZETA_FACTOR:g})")
+    return out
+
+
 def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     """Write ``res.out_dir/index.html`` (+ tables/*.csv) and return the page path."""
     title = f"mvtk validation report: {res.study.name}"
@@ -718,7 +794,10 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     checks = study_checks(res)
     checks_df = check_table(checks)
     if checks:
-        sec.table(checks_df, "checks", "Checks against the study's tolerances")
+        sec.table(display_checks(checks_df), "checks", "Checks against the study's tolerances "
+                  "(deviation: relative error of a two-sided check; margin: distance to the "
+                  "nearest limit in % of that limit, negative when failed)")
+        rep.tables["checks"] = checks_df   # the CSV keeps the tolerance as defined
     else:
         sec.unavailable("no check could be evaluated (no stage produced comparable numbers)")
     done = [s for s in ("damping", "modal", "updating", "correlation", "reduction", "control")
@@ -734,7 +813,10 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
                    f"{', '.join(done) or 'none'}"),
         against=(f"the measurements {', '.join(tests) or '(none)'}"
                  + (" (SYNTHETIC)" if res.study.synthetic else "")
-                 + " and the tolerances and references of the study file"))
+                 + " and the tolerances"
+                 + (" and references" if res.study.config.get("references") else "")
+                 + " of the study file"),
+        warnings=_stage_warnings(res), inconsistencies=_inconsistencies(res))
     params = {"study": res.study.config, "file_sha256": hashes}
     rep.add_provenance(collect_provenance(res.study.input_files, params))
     return rep.write(res.out_dir)

@@ -110,8 +110,9 @@ def test_render_table_formats_by_quantity():
                        "error_pct": [0.00027713670949780034, 2.5e-07],
                        "mac": [0.9999999992121509, 0.999999999594787]})
     html = render_table(df, passed_column=None)
-    assert "<th>fe [Hz]</th>" in html and "<th>error [%]</th>" in html
-    assert "<td>13.277</td>" in html and "<td>2.77e-4</td>" in html
+    assert "<th>FE [Hz]</th>" in html and "<th>error [%]</th>" in html
+    # a percent column in fixed notation (one notation per column)
+    assert "<td>13.277</td>" in html and "<td>0.000277</td>" in html
     assert "<td>&lt; 1e-6</td>" in html and "<td>1.000</td>" in html
     assert "13.277063" not in html
     html = render_table(df, passed_column=None, formats={"fe_hz": 8})

@@ -121,3 +121,21 @@ def test_own_structure_report_numbers_against_the_simulated_truth(plate_report):
     # f ~ sqrt(E): the nominal plate (70 GPa) is 0.99 x too stiff in mode 1
     e = prm.loc["materials.aluminium.E", "updated"]
     assert 60e9 < e < 75e9
+
+
+def test_own_structure_report_headers_and_notation(plate_report):
+    from report_scan import problems
+
+    _, html = plate_report
+    assert problems(html) == []
+
+
+def test_scan_finds_raw_headers_and_mixed_notation():
+    """The scan itself on a page made to fail it (a test that cannot fail is worthless)."""
+    from report_scan import problems
+
+    page = ('<table class="mvtk" id="table-x"><thead><tr><th>max_real_pole</th>'
+            "<th>zeta</th></tr></thead><tbody><tr><td>1</td><td>5.839e-4</td></tr>"
+            "<tr><td>2</td><td>0.001321</td></tr></tbody></table>")
+    found = problems(page)
+    assert len(found) == 2 and "raw field name" in found[0] and "mixes" in found[1]

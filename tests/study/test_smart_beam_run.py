@@ -209,3 +209,15 @@ def test_report_renders_in_chromium(out_dir, tmp_path):
     res = cr.run_cmd([exe, *cr.FLAGS, f"--user-data-dir={tmp_path / 'ud2'}",
                       f"--screenshot={shot}", "--window-size=1280,4000", page.as_uri()])
     assert res.returncode == 0 and shot.stat().st_size > 10_000
+
+
+def test_report_headers_are_labels_and_columns_have_one_notation(out_dir):
+    from report_scan import problems, tables
+
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    assert problems(html) == []
+    heads = {t: h for t, (h, _) in tables(html).items()}
+    ctl = heads["table-controller_comparison"]
+    assert "max real pole [1/s]" in ctl and "critical pole imag [rad/s]" in ctl
+    assert "stable orders" in heads["table-modal_modes"]
+    assert "unit" in heads["table-updating_parameters"]
