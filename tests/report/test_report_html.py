@@ -354,3 +354,39 @@ def test_pdf_refused_clearly_without_chromium(tmp_path, monkeypatch):
     with pytest.raises(PdfExportError, match=r"failed to print .* \(exit code 1\)"):
         to_pdf(tmp_path / "out")
     assert not (tmp_path / "out" / "report.pdf").exists()
+
+
+def test_summary_ranks_graded_checks_and_lists_the_others_apart():
+    from mvtk.report import classify_checks
+
+    checks = check_table([
+        Check("f5 prediction", 171.82, 176.36, 0.03, "Hz"),            # -2.57 % of ±3 %
+        Check("f1", 13.26, 13.26, 0.005, "Hz"),                          # on the reference
+        Check("MAC", 0.984, 0.9, 0.0, kind="lower"),                     # slack 9.3 %
+        Check("peak voltage", 100.0, 100.0, 0.0, "V", kind="upper"),     # saturated
+        Check("stable", 1.0, 1.0, 0.0, kind="lower"),                    # yes/no
+        Check("SE >= FE", 13.28, 13.277, 1.3e-8, "Hz", kind="lower"),    # exact bound
+    ])
+    cls = classify_checks(checks)
+    assert list(cls["category"]) == ["graded", "graded", "graded", "at limit", "yes/no",
+                                     "exact bound"]
+    # margin: distance to the nearest limit in % of it; 171.82 vs 0.97 * 176.36
+    assert cls["margin_pct"][0] == pytest.approx(100 * (171.82 / (0.97 * 176.36) - 1))
+    assert cls["margin_pct"][2] == pytest.approx(100 * (0.984 / 0.9 - 1))
+    rep = Report("r")
+    rep.executive_summary(checks, validated="x", against="y", n_worst=2,
+                          warnings=["damping: 2 lines in the band"],
+                          inconsistencies=["mode 1: zeta a factor 8.8 apart"])
+    text = rep.to_html()
+    worst = text[text.index('id="table-summary-worst"'):]
+    worst = worst[:worst.index("</table>")]
+    assert re.findall(r'<tr><td class="text">([^<]+)</td>', worst) == ["f5 prediction", "f1"]
+    apart = text[text.index('id="table-summary-apart"'):]
+    assert "peak voltage" in apart and "at limit" in apart and "≤ 100 V" in apart
+    assert rep.summary_verdict == ("PASS WITH RESERVATIONS: all 6 checks passed, 1 met only "
+                                   "at the limit, 1 warning, 1 inconsistency")
+    assert "damping: 2 lines in the band" in text and "factor 8.8" in text
+    failed = Report("f")
+    failed.executive_summary(check_table([Check("f", 2.0, 1.0, 0.1)]), validated="x",
+                             against="y", warnings=["w"])
+    assert failed.summary_verdict == "FAIL: 1 of 1 checks failed"

@@ -221,3 +221,23 @@ def test_report_headers_are_labels_and_columns_have_one_notation(out_dir):
     assert "max real pole [1/s]" in ctl and "critical pole imag [rad/s]" in ctl
     assert "stable orders" in heads["table-modal_modes"]
     assert "unit" in heads["table-updating_parameters"]
+
+
+def test_summary_shows_the_checks_closest_to_failing_and_the_warnings(out_dir):
+    from report_scan import tables
+
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    t = tables(html)
+    heads, rows = t["table-summary-worst"]
+    first = dict(zip(heads, rows[0]))
+    # the model-form check of test mode 5: -2.57 % of ±3 % (correlation_pairs.csv)
+    assert first["check"].startswith("predicted f of test mode 5")
+    assert float(first["margin to the limit [%]"]) < 0.5
+    assert float(first["share of tolerance used [%]"]) == pytest.approx(85.8, abs=0.2)
+    # saturated actuators and the Rayleigh-Ritz bounds are listed apart, not ranked
+    apart = [r[0] for r in t["table-summary-apart"][1]]
+    assert any("peak voltage" in c for c in apart) and any("Rayleigh-Ritz" in c for c in apart)
+    assert not any("peak voltage" in r[0] for r in rows)
+    assert 'id="summary-warnings"' in html and "ResolutionWarning" in html
+    assert 'id="summary-inconsistencies"' in html
+    assert "PASS WITH RESERVATIONS" in html
