@@ -48,8 +48,7 @@ h1 { border-bottom: 2px solid #335; }
 h2 { border-bottom: 1px solid #aab; margin-top: 2em; }
 $table_css
 figure { margin: 1em 0; max-width: 100%; }
-figure img { display: block; box-sizing: border-box; width: 100%; max-width: 702px;
-             height: auto;
+figure img { display: block; box-sizing: border-box; width: 100%; height: auto;
              border: 1px solid #ddd; }
 figcaption { font-size: 0.9em; color: #444; }
 .verdict { font-size: 1.2em; padding: 0.5em 1em; border-radius: 4px; display: inline-block; }
@@ -62,7 +61,22 @@ figcaption { font-size: 0.9em; color: #444; }
 .synthetic { background: #e8f0ff; border-left: 4px solid #3a6fd8; padding: 0.5em 1em; }
 pre { background: #f6f6f8; padding: 0.6em; overflow-x: auto; font-size: 0.85em; }
 a.csv { font-size: 0.85em; font-weight: normal; }
-@page { size: A4; margin: 14mm 12mm; }
+table.signoff { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.92em; }
+table.signoff th, table.signoff td { border: 1px solid #889; padding: 0.3em 0.7em;
+             text-align: left; vertical-align: top; }
+table.signoff th { background: #eef; }
+table.signoff td.sign { min-width: 12em; height: 2.2em; }
+nav.toc ol { padding-left: 1.4em; margin: 0.3em 0; }
+nav.toc a { text-decoration: none; color: #224; }
+nav.toc a:hover { text-decoration: underline; }
+nav.toc .toc-title { font-weight: bold; }
+@media screen and (min-width: 1180px) {
+  body { margin-left: 17em; max-width: 82em; }
+  nav.toc { position: fixed; left: 0; top: 0; bottom: 0; width: 15em; overflow-y: auto;
+            padding: 1em 0.8em; background: #f4f5fa; border-right: 1px solid #ccd;
+            font-size: 0.9em; box-sizing: border-box; }
+}
+$page_css
 @media print {
   body { margin: 0; max-width: none; padding: 0; font-size: 10pt; }
   nav, a.csv { display: none; }
@@ -70,17 +84,20 @@ a.csv { font-size: 0.85em; font-weight: normal; }
   .mvtk-table-wrap { overflow: visible; }
   table.mvtk { font-size: 7.5pt; }
   table.mvtk th, table.mvtk td { padding: 0.2em 0.3em; }
-  table.mvtk tr, figure, .executive { break-inside: avoid; }
+  table.mvtk tr, figure, table.signoff { break-inside: avoid; }
   figure img { max-width: 100%; }
   pre { white-space: pre-wrap; overflow-wrap: anywhere; }
 }
 </style>
 </head>
 <body>
-<h1>$title</h1>
-$summary
 $toc
+<main>
+<h1>$title</h1>
+$signoff
+$summary
 $body
+</main>
 </body>
 </html>
 """
@@ -462,6 +479,7 @@ class Report:
     provenance: Provenance | None = None
     summary_html: str = ""
     summary_verdict: str = ""
+    document: dict[str, str] = field(default_factory=dict)
     workers: int | None = None
     _figure_renderer: FigureRenderer | None = field(default=None, init=False,
                                                     repr=False, compare=False)
@@ -664,6 +682,74 @@ class Report:
         self.summary_verdict = verdict
         return self
 
+    def set_document(self, **fields: str | None) -> Report:
+        """Make the report a controlled document: a title block with sign-off lines and,
+        in the PDF, a running header and footer with page numbers.
+
+        Parameters
+        ----------
+        **fields : str
+            Any of ``document_number, revision, date, author, reviewer, approver,
+            organisation`` (``None`` or empty: left out; an empty sign-off line is still
+            printed for the author, reviewer and approver to sign).
+
+        Examples
+        --------
+        >>> rep = Report("Validation report: plate").set_document(
+        ...     document_number="VR-7", revision="B", author="A. Engineer")
+        >>> "VR-7" in rep.to_html() and "Page" in rep.to_html()
+        True
+        """
+        known = ("document_number", "revision", "date", "author", "reviewer", "approver",
+                 "organisation")
+        unknown = [k for k in fields if k not in known]
+        if unknown:
+            raise ParameterError(f"set_document: unknown fields {unknown}; accepted: "
+                                 f"{list(known)}")
+        self.document = {k: str(v) for k, v in fields.items() if v not in (None, "")}
+        return self
+
+    def _signoff_html(self) -> str:
+        d = self.document
+        if not d:
+            return ""
+        e = html.escape
+        ident = [("Document number", d.get("document_number", "–")),
+                 ("Revision", d.get("revision", "–")), ("Date", d.get("date", "–"))]
+        if "organisation" in d:
+            ident.append(("Organisation", d["organisation"]))
+        head = "".join(f"<th>{e(k)}</th>" for k, _ in ident)
+        vals = "".join(f"<td>{e(v)}</td>" for _, v in ident)
+        rows = "".join(
+            f"<tr><th>{e(role)}</th><td>{e(d.get(key, ''))}</td>"
+            '<td class="sign"></td><td class="sign"></td></tr>'
+            for role, key in (("Prepared by", "author"), ("Reviewed by", "reviewer"),
+                              ("Approved by", "approver")))
+        return ('<section class="signoff" id="report-signoff">'
+                f'<table class="signoff"><tr>{head}</tr><tr>{vals}</tr></table>'
+                '<table class="signoff"><tr><th>Role</th><th>Name</th><th>Signature</th>'
+                f"<th>Date</th></tr>{rows}</table></section>")
+
+    def _page_css(self) -> str:
+        """Print header and footer (CSS page margin boxes; Chromium >= 131)."""
+        def css_str(text: str) -> str:
+            return '"' + text.replace("\\", "\\\\").replace('"', '\\"').replace(
+                "\n", " ").replace("<", "\\3C ") + '"'
+
+        d = self.document
+        ident = " ".join(x for x in (d.get("document_number", ""),
+                                     f"rev. {d['revision']}" if "revision" in d else "")
+                         if x)
+        right = ident or (self.provenance.created_utc[:10] if self.provenance else "")
+        left = self.title if len(self.title) <= 90 else self.title[:87] + "..."
+        return ("@page { size: A4; margin: 18mm 12mm 16mm 12mm;\n"
+                f"  @top-left {{ content: {css_str(left)}; font-size: 8pt; color: #555; }}\n"
+                f"  @top-right {{ content: {css_str(right)}; font-size: 8pt; color: #555; }}\n"
+                f"  @bottom-left {{ content: {css_str(self.summary_verdict.split(':')[0])};"
+                " font-size: 8pt; color: #555; }\n"
+                '  @bottom-right { content: "Page " counter(page) " of " counter(pages); '
+                "font-size: 8pt; color: #555; }\n}")
+
     @property
     def n_passed(self) -> int:
         return sum(self.verdicts)
@@ -692,12 +778,15 @@ class Report:
                 f"<li>{html.escape(t)}: {html.escape(r)}</li>" for t, r in self.unavailable
             )
             summary += f'<div class="unavailable">Stages not available:<ul>{items}</ul></div>'
-        toc = "<nav><ol>" + "".join(
+        first = ('<li><a href="#executive-summary">Executive summary</a></li>'
+                 if self.summary_html else "")
+        toc = ('<nav class="toc"><div class="toc-title">Contents</div><ol>' + first + "".join(
             f'<li><a href="#{s.anchor}">{html.escape(s.title)}</a></li>' for s in self.sections
-        ) + "</ol></nav>"
+        ) + "</ol></nav>")
         body = "\n".join(s.render() for s in self.sections)
         return _PAGE.substitute(title=html.escape(self.title), summary=summary, toc=toc,
-                                body=body, table_css=TABLE_CSS)
+                                body=body, table_css=TABLE_CSS, signoff=self._signoff_html(),
+                                page_css=self._page_css())
 
     def write(self, out_dir: str | Path) -> Path:
         """Write ``out_dir/index.html`` and ``out_dir/tables/<name>.csv``; return the page path."""

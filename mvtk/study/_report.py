@@ -17,6 +17,7 @@ import pandas as pd
 
 from .._format import parameter_unit
 from ..report import Report, collect_provenance, display_checks
+from ..report._provenance import relative_path
 from ..validation import Check, check_table, frequency_table
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -778,10 +779,26 @@ def _inconsistencies(res: StudyResult) -> list[str]:
     return out
 
 
+def _relative_strings(obj, base: Path):
+    """``obj`` (a parsed study) with every absolute path written relative to ``base``."""
+    if isinstance(obj, dict):
+        return {k: _relative_strings(v, base) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_relative_strings(v, base) for v in obj]
+    if isinstance(obj, str | Path) and Path(obj).is_absolute():
+        return relative_path(obj, base)
+    return obj
+
+
 def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     """Write ``res.out_dir/index.html`` (+ tables/*.csv) and return the page path."""
-    title = f"mvtk validation report: {res.study.name}"
+    import datetime as _dt
+
+    doc = dict(res.study.config.get("report") or {})
+    title = doc.pop("title", None) or f"Validation report: {res.study.name}"
     rep = Report(title)
+    doc["date"] = doc.get("date") or _dt.datetime.now(_dt.UTC).date().isoformat()
+    rep.set_document(**doc)
     _section_run(rep, res)
     _section_measurements(rep, res)
     _section_damping(rep, res)
@@ -817,6 +834,8 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
                  + (" and references" if res.study.config.get("references") else "")
                  + " of the study file"),
         warnings=_stage_warnings(res), inconsistencies=_inconsistencies(res))
-    params = {"study": res.study.config, "file_sha256": hashes}
-    rep.add_provenance(collect_provenance(res.study.input_files, params))
+    base = res.study.path.parent
+    params = {"study": _relative_strings(res.study.config, base),
+              "file_sha256": {relative_path(k, base): v for k, v in hashes.items()}}
+    rep.add_provenance(collect_provenance(res.study.input_files, params, base=base))
     return rep.write(res.out_dir)

@@ -139,9 +139,11 @@ def test_executive_summary_verdict_and_worst_checks():
                           against="paper Tables 2-3", n_worst=3)
     text = rep.to_html()
     assert rep.summary_verdict == "FAIL: 2 of 5 checks failed"
-    # at the top: before the table of contents and the first section
+    # at the top of the page, before the first section; the contents are a sidebar
+    # (first in the page, fixed at the left on a wide screen) that links to it
     pos = text.index('id="executive-summary"')
-    assert pos < text.index("<nav>") < text.index('<section id="s1">')
+    assert text.index('<nav class="toc">') < pos < text.index('<section id="s1">')
+    assert 'href="#executive-summary"' in text
     summary = text[pos:text.index("</section>", pos)]
     assert "FE model and damping of the smart beam" in summary and "paper Tables 2-3" in summary
     # failed first, then the passing one closest to its limit; 3 rows only

@@ -49,16 +49,27 @@ def _impact_csv(path: Path) -> None:
 
 @pytest.fixture(scope="module")
 def plate_report(tmp_path_factory) -> tuple[Path, str]:
-    folder = tmp_path_factory.mktemp("plate_study")
+    lab = tmp_path_factory.mktemp("lab")
+    folder = lab / "study"
+    folder.mkdir()
+    (lab / "structures").mkdir()
+    (lab / "structures" / "plate.toml").write_bytes(PLATE.read_bytes())
     _impact_csv(folder / "impact.csv")
     study = folder / "study.toml"
-    study.write_text(f"""
+    study.write_text("""
 [study]
 name = "Aluminium plate, lab test 7"
 synthetic = true
 
+[report]
+document_number = "VR-PL-007"
+revision = "B"
+author = "A. Tester"
+reviewer = "R. Checker"
+organisation = "Structures lab"
+
 [structure]
-file = "{PLATE.as_posix()}"
+file = "../structures/plate.toml"
 
 [measurements.impact]
 file = "impact.csv"
@@ -139,3 +150,17 @@ def test_scan_finds_raw_headers_and_mixed_notation():
             "<tr><td>2</td><td>0.001321</td></tr></tbody></table>")
     found = problems(page)
     assert len(found) == 2 and "raw field name" in found[0] and "mixes" in found[1]
+
+
+def test_own_structure_report_is_a_controlled_document(plate_report):
+    """Title block from [report], provenance without a path of this machine."""
+    out, html = plate_report
+    sign = html[html.index('id="report-signoff"'):]
+    sign = sign[:sign.index("</section>")]
+    for text in ("VR-PL-007", "B", "A. Tester", "R. Checker", "Structures lab",
+                 "Prepared by", "Reviewed by", "Approved by"):
+        assert text in sign, text
+    assert "Validation report: Aluminium plate, lab test 7" in html
+    assert str(out.parent.parent) not in html and str(ROOT) not in html
+    assert "mvtk git commit" in html and "command line" in html
+    assert "../structures/plate.toml" in html   # relative to the study file
