@@ -1,8 +1,9 @@
 """A self-contained HTML report: sections, pandas tables with pass/fail, figures.
 
-The page has no script and no external resource (figures are embedded as base64 SVG
-for line plots or PNG for raster and very dense ones; styles are inline), so it opens
-offline and prints to PDF (:func:`mvtk.report.to_pdf`). Table cells are formatted by quantity
+The page loads nothing from elsewhere: figures are embedded as base64 SVG for line plots
+or PNG for raster and very dense ones, styles are inline, and animated mode shapes are a
+canvas with inline data and script. It opens offline and prints to PDF
+(:func:`mvtk.report.to_pdf`). Table cells are formatted by quantity
 (:mod:`mvtk.report._format`) and each table sits in a box that scrolls horizontally when
 the window is too narrow. Each table is also written, unformatted, as CSV next to
 ``index.html`` under ``tables/``.
@@ -51,6 +52,11 @@ figure { margin: 1em 0; max-width: 100%; }
 figure img { display: block; box-sizing: border-box; width: 100%; height: auto;
              border: 1px solid #ddd; }
 figcaption { font-size: 0.9em; color: #444; }
+.mode-animation .controls { font-size: 0.9em; margin: 0.3em 0; }
+.mode-animation .hint { color: #777; }
+.animation { margin: 1em 0; break-inside: avoid; }
+.animation .caption { font-size: 0.9em; color: #444; margin-top: 0.2em; }
+@media print { .mode-animation .controls { display: none; } }
 .verdict { font-size: 1.2em; padding: 0.5em 1em; border-radius: 4px; display: inline-block; }
 .verdict.pass { background: #d7f5d7; } .verdict.fail { background: #fbd5d5; }
 .verdict.reserved { background: #fff0c2; }
@@ -438,6 +444,23 @@ class Section:
         self.blocks.append(_FigureBlock(job, self.report.n_figures, alt_text, caption))
         return self
 
+    def mode_animation(self, xyz: Any, shapes: Any, labels: list[str], caption: str = "",
+                       **kwargs: Any) -> Section:
+        """Add animated 3-D mode shapes (a canvas with inline data and script: plays
+        offline, no library); arguments as :func:`mvtk.plot.mode_animation_html`.
+
+        A printed page shows the first frame.
+        """
+        from ..plot import mode_animation_html
+
+        self.report.n_animations += 1
+        block = mode_animation_html(xyz, shapes, labels,
+                                    element_id=f"mode-animation-{self.report.n_animations}",
+                                    **kwargs)
+        self.blocks.append(f'<div class="animation">{block}<p class="caption">Animation '
+                           f"{self.report.n_animations}: {html.escape(caption)}</p></div>")
+        return self
+
     def preformatted(self, text: str) -> Section:
         """Add preformatted text (escaped)."""
         self.blocks.append(f"<pre>{html.escape(text)}</pre>")
@@ -476,6 +499,7 @@ class Report:
     verdicts: list[bool] = field(default_factory=list)
     unavailable: list[tuple[str, str]] = field(default_factory=list)
     n_figures: int = 0
+    n_animations: int = 0
     provenance: Provenance | None = None
     summary_html: str = ""
     summary_verdict: str = ""

@@ -452,6 +452,8 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.figure(partial(plot_mode_shapes, arr["nodes"].values, arr["uz"].values[:, :k],
                                     fe["fn_hz"][:k]),
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
+        if "correlation" not in res.results:
+            _mode_animation(sec, res)
 
 
 def _mc_paths(u: dict) -> str:
@@ -707,6 +709,7 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
                 "FE mesh with the test wireframe and sensors"}
     for name, b64 in cor["figures"].items():
         sec.figure(_png(b64), captions.get(name, name))
+    _mode_animation(sec, res)
 
 
 def _stage_warnings(res: StudyResult) -> list[str]:
@@ -788,6 +791,67 @@ def _relative_strings(obj, base: Path):
     if isinstance(obj, str | Path) and Path(obj).is_absolute():
         return relative_path(obj, base)
     return obj
+
+
+def _mode_animation(sec, res: StudyResult) -> None:
+    """Animated FE mode shapes on the FE mesh; with a multi-point test, the test
+    wireframe over it moving with the identified mode paired to each FE mode by MAC."""
+    arr = res.arrays.get("fe")
+    if arr is None:
+        return
+    fe = res.results["fe"]
+    xyz = np.asarray(arr["nodes"].values, dtype=float)
+    uz = np.asarray(arr["uz"].values, dtype=float)
+    k = uz.shape[1]
+    fn = list(fe["fn_hz"])[:k]
+    labels = [f"FE mode {i + 1}: {fn[i]:.4g} Hz" for i in range(k)]
+    overlay = None
+    caption = (f"The {k} lowest modes of the nominal FE model (uz) on its mesh; drag to "
+               "rotate, choose the mode above. The page plays it offline.")
+    marr = res.arrays.get("modal")
+    if marr is not None and "modal" in res.results:
+        from ._ema import geometry_of
+
+        files = res.study.extra_files
+        study = SimpleNamespace(has_extra_file=files.__contains__, extra_file=files.__getitem__)
+        try:
+            geo = geometry_of(study, marr)
+        except Exception:   # noqa: BLE001 - the animation shows the FE model alone
+            geo = None
+        if geo is not None:
+            shapes = np.real(np.asarray(marr["shapes"].values))        # (mode, dof)
+            vec = geo.sensor_vectors()                                   # (dof, 3)
+            rows = [geo.row(sn.node) for sn in geo.sensors]
+            disp = np.zeros((geo.n_nodes, 3, shapes.shape[0]))
+            for d, r in enumerate(rows):
+                disp[r] += vec[d][:, None] * shapes[:, d][None, :]
+            # FE uz at the FE node nearest each test node: MAC pairing and sign
+            near = np.argmin(np.linalg.norm(xyz[None, :, :] - geo.xyz[:, None, :], axis=2),
+                             axis=1)
+            fe_at = uz[near]                                             # (n_test, k)
+            test_z = disp[:, 2, :]                                       # (n_test, modes)
+            num = (fe_at.T @ test_z) ** 2
+            den = np.outer((fe_at**2).sum(0), (test_z**2).sum(0))
+            mac = np.divide(num, den, out=np.zeros_like(num), where=den > 0)   # (k, modes)
+            ov = np.full((geo.n_nodes, 3, k), np.nan)
+            f_test = np.asarray(marr["fn_hz"].values, dtype=float)
+            for j in range(shapes.shape[0]):
+                i = int(np.argmax(mac[:, j]))
+                if mac[i, j] < 0.5 or np.isfinite(ov[0, 0, i]):
+                    continue
+                sign = np.sign(fe_at[:, i] @ test_z[:, j]) or 1.0
+                ov[:, :, i] = sign * disp[:, :, j]
+                labels[i] += f" / test mode {j + 1}: {f_test[j]:.4g} Hz (MAC {mac[i, j]:.2f})"
+            edges = geo.edges()
+            overlay = {"xyz": geo.xyz, "shapes": ov, "name": "test wireframe",
+                       "edges": edges if len(edges) else None}
+            caption = (f"The {k} lowest modes of the nominal FE model (uz, blue mesh) with "
+                       f"the test wireframe ({geo.n_nodes} test nodes, red"
+                       + ("" if len(edges) else "; lines: triangulation of the test nodes")
+                       + ") moving with the identified mode paired to each FE mode by MAC "
+                       "(0.5 at least); drag to rotate, choose the mode above. The page "
+                       "plays it offline.")
+    sec.mode_animation(xyz, uz, labels, caption, overlay=overlay)
 
 
 def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:

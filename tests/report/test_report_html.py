@@ -36,7 +36,8 @@ class _Collector(HTMLParser):
             self.pass_cells += 1
         if tag == "td" and a.get("class") == "fail":
             self.fail_cells += 1
-        if tag in ("script", "link") or (tag == "img" and not a["src"].startswith("data:")):
+        if (tag == "script" and "src" in a) or tag == "link" or (
+                tag == "img" and not a["src"].startswith("data:")):
             self.external.append(tag)
 
 

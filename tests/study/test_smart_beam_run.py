@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 
 import pandas as pd
@@ -241,3 +242,11 @@ def test_summary_shows_the_checks_closest_to_failing_and_the_warnings(out_dir):
     assert 'id="summary-warnings"' in html and "ResolutionWarning" in html
     assert 'id="summary-inconsistencies"' in html
     assert "PASS WITH RESERVATIONS" in html
+
+
+def test_report_animates_fe_and_identified_shapes_together(out_dir):
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    assert html.count("<canvas") == 1 and 'id="mode-animation-1-data"' in html
+    # every identified mode paired with its FE mode by MAC over the test wireframe
+    for j, f in enumerate(("13.26", "41.14", "78.69", "137.8", "176.4", "224.5")):
+        assert re.search(rf"test mode {j + 1}: {re.escape(f)} Hz \(MAC (0\.9\d|1\.00)\)", html), f
