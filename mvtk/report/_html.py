@@ -670,7 +670,8 @@ class Report:
         ]
         fmt = {"tolerance_used_pct": ColumnFormat("percent", 3, "%",
                                                   label="share of tolerance used"),
-               "margin_pct": ColumnFormat("percent", 3, "%", label="margin to the limit")}
+               "margin_pct": ColumnFormat("percent", 3, "%", label="margin to the limit"),
+               "tolerance": ColumnFormat("text", label="criterion")}
         if len(worst):
             title = (f"The {len(worst)} graded checks closest to failing (margin: distance "
                      "of the value to its nearest limit, in % of that limit)"
@@ -688,7 +689,8 @@ class Report:
             parts.append(render_table(
                 shown, caption="Yes/no checks, exact bounds and bounds met at their limit "
                 "(no margin to rank)", passed_column=passed_column,
-                table_id="table-summary-apart"))
+                table_id="table-summary-apart",
+                formats={"tolerance": fmt["tolerance"]} if "tolerance" in acols else None))
         if warnings:
             items = "".join(f"<li>{html.escape(str(w))}</li>" for w in warnings)
             parts.append(f'<div class="unavailable" id="summary-warnings"><b>Warnings '

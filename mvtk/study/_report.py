@@ -351,15 +351,18 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                    "half-power bands of the higher identified modes (shaded).")
     if arr is not None and "frf_abs" in arr:
         bands = _bands("impact")
+        coh = arr["coherence"].values if "coherence" in arr else None
         sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values, bands=bands,
-                            ylabel=f"|H| [{d.get('frf_units', '')}]",
+                            ylabel=f"|H| [{d.get('frf_units', '')}]", coherence=coh,
                             title="Impact FRF (H1) with half-power bands"),
-                   "Impact-test FRF with the half-power bands of each mode (shaded).")
+                   "Impact-test FRF with the half-power bands of each mode (shaded) and its "
+                   "coherence (below): where the coherence drops, the FRF is not to be trusted.")
         for i, (lo, hi, fn) in enumerate(bands):
             w = max(6 * (hi - lo), 0.3)
             sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values,
                                 bands=[(lo, hi, fn)], f_range=(fn - w, fn + w),
-                                ylabel="|H|", markers=True,
+                                ylabel=f"|H| [{d.get('frf_units', '')}]", markers=True,
+                                coherence=coh,
                                 title=f"Mode {i + 1}: zoom on the half-power band"),
                        f"Half-power band of mode {i + 1} and the frequency lines across it.")
     if arr is not None and "decay_x" in arr and d.get("envelope"):

@@ -328,3 +328,18 @@ def test_mode_shape_panels_share_their_given_ticks():
     assert [t.get_text() for t in cbar.get_yticklabels()] == ["\u22121.0", "\u22120.5", "0.0",
                                                               "0.5", "1.0"]
     assert_readable(fig)
+
+
+def test_frf_with_coherence_and_close_peak_labels_stays_readable():
+    """Two modes 1.5 Hz apart (labels would collide) and a coherence panel below."""
+    from mvtk.plot import plot_frf
+
+    f = np.linspace(5.0, 60.0, 2000)
+    h = 1 / (20.0**2 - f**2 + 0.4j * f) + 1 / (21.5**2 - f**2 + 0.4j * f)
+    coh = 1 - 0.5 * np.exp(-((f - 40.0) / 2.0) ** 2)          # a dip at an antiresonance
+    fig = plot_frf(f, h, bands=[(19.9, 20.1, 20.0), (21.4, 21.6, 21.5)],
+                   ylabel="|H| [m/N]", coherence=coh, title="FRF and coherence")
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "coherence"
+    y = fig.axes[1].lines[0].get_ydata()
+    assert min(y) == pytest.approx(0.5, abs=1e-3)              # the dip is drawn
+    assert_readable(fig)
