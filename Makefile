@@ -21,7 +21,8 @@ $(VENV)/bin/python:
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
 $(REPORT_STAMP): pyproject.toml | $(VENV)/bin/python
-	$(BIN)/python -m pip install --quiet -e '.[cholmod]'
+	# --no-compile: byte code is written for the modules a run imports, not for all (135 MB)
+	$(BIN)/python -m pip install --quiet --no-compile -e '.[cholmod]'
 	touch $(REPORT_STAMP)
 
 $(STAMP): pyproject.toml | $(VENV)/bin/python
