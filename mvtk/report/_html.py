@@ -406,8 +406,15 @@ class Section:
             )
         if name in self.report.tables:
             raise ParameterError(f"table name {name!r} is used twice in the report")
+        # a column with no value in any row says nothing on the page (the CSV keeps it)
+        empty = [c for c in df.columns if c != passed_column and len(df) and all(
+            v is None or (isinstance(v, str) and not v.strip())
+            or (isinstance(v, float) and v != v) for v in df[c].tolist())]
+        shown = df.drop(columns=empty) if empty else df
+        if formats is not None:
+            formats = {k: v for k, v in formats.items() if k not in empty}
         try:
-            block = render_table(df, caption=caption, passed_column=passed_column,
+            block = render_table(shown, caption=caption, passed_column=passed_column,
                                  csv_href=f"tables/{name}.csv", table_id=f"table-{name}",
                                  formats=formats)
         except ParameterError as err:

@@ -393,3 +393,17 @@ def test_summary_ranks_graded_checks_and_lists_the_others_apart():
     failed.executive_summary(check_table([Check("f", 2.0, 1.0, 0.1)]), validated="x",
                              against="y", warnings=["w"])
     assert failed.summary_verdict == "FAIL: 1 of 1 checks failed"
+
+
+def test_empty_columns_are_left_off_the_page_but_kept_in_the_csv(tmp_path):
+    rep = Report("r")
+    df = pd.DataFrame({"stage": ["fe", "modal"], "note": ["", ""],
+                       "time_s": [0.5, float("nan")], "spare": [np.nan, np.nan]})
+    rep.section("Stages").table(df, "stages", passed_column=None)
+    page = rep.write(tmp_path).read_text(encoding="utf-8")
+    table = page[page.index('id="table-stages"'):]
+    table = table[:table.index("</table>")]
+    assert "<th" in table and "note" not in table and "spare" not in table
+    assert "time [s]" in table   # a column with one value stays
+    csv = pd.read_csv(tmp_path / "tables" / "stages.csv")
+    assert list(csv.columns) == ["stage", "note", "time_s", "spare"]
