@@ -123,8 +123,16 @@ def command_line(argv: Iterable[str] | None = None, base: str | Path | None = No
     import shlex
 
     args = list(sys.argv if argv is None else argv)
-    if args and Path(args[0]).name in ("__main__.py", "mvtk"):
+    if not args:
+        return "–"
+    first = Path(args[0])
+    if first.name == "mvtk" or (first.name == "__main__.py" and first.parent.name == "mvtk"):
         args[0] = "mvtk"
+    elif argv is None:
+        # mvtk called from another program (a script, a notebook, a test runner): its
+        # command line is not the one that made the report, only its name is recorded
+        prog = first.parent.name if first.name == "__main__.py" else first.name
+        return f"mvtk called from Python ({prog or 'interactive'})"
     return " ".join(shlex.quote(relative_path(a, base) if a.startswith("/") else a)
                     for a in args)
 

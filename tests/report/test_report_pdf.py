@@ -66,3 +66,13 @@ def test_html_title_block_and_sidebar_without_chromium(tmp_path):
     assert '@top-right { content: "VR-PL-007 rev. B"' in html
     with pytest.raises(Exception, match="unknown fields"):
         Report("x").set_document(author="a", checker="b")
+
+
+def test_command_line_is_recorded_only_for_the_mvtk_command():
+    from mvtk.report._provenance import command_line
+
+    assert command_line(["/usr/bin/mvtk", "run", "/data/lab/s/study.toml", "--out",
+                         "/data/lab/s/out"], "/data/lab/s") == "mvtk run study.toml --out out"
+    assert command_line(["/venv/lib/mvtk/__main__.py", "run", "s.toml"]) == "mvtk run s.toml"
+    # from another program (here pytest) only its name: its arguments are not the command
+    assert command_line().startswith("mvtk called from Python (")
