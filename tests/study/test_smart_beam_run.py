@@ -250,3 +250,23 @@ def test_report_animates_fe_and_identified_shapes_together(out_dir):
     # every identified mode paired with its FE mode by MAC over the test wireframe
     for j, f in enumerate(("13.26", "41.14", "78.69", "137.8", "176.4", "224.5")):
         assert re.search(rf"test mode {j + 1}: {re.escape(f)} Hz \(MAC (0\.9\d|1\.00)\)", html), f
+
+
+def test_printed_report_is_a_controlled_document(out_dir):
+    """The example's PDF read back: title block, header and page numbers on every page,
+    provenance without a path of this machine (needs Debian chromium)."""
+    pypdf = pytest.importorskip("pypdf", reason="pypdf is a test dependency")
+    from mvtk.report import find_chromium, to_pdf
+
+    if find_chromium() is None:
+        pytest.skip("chromium not installed (run tests/report/install_chromium.sh as root)")
+    reader = pypdf.PdfReader(str(to_pdf(out_dir / "index.html")))
+    texts = [p.extract_text() for p in reader.pages]
+    n = len(texts)
+    assert n > 10
+    for i, text in enumerate(texts):
+        assert "MVTK-EX-SB-001 rev. 1" in text and f"Page {i + 1} of {n}" in text
+    assert "Prepared by" in texts[0] and "Executive summary" in texts[0]
+    everything = "".join(texts)
+    assert str(ROOT) not in everything and str(out_dir) not in everything
+    assert "mvtk git commit" in everything and "../structures/smart_beam.toml" in everything
