@@ -203,6 +203,11 @@ def test_mesh_figure_draws_each_edge_once_with_the_sensors(plate):
     assert len(keys) == len(segs)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "z sensors" in labels
+    # the geometry has no trace lines: its 5 x 4 grid of nodes is triangulated, dashed,
+    # (5-1) 4 + 5 (4-1) grid edges and (5-1)(4-1) diagonals
+    wire = ax.collections[1]
+    assert wire.get_label().startswith("test wireframe (triangulated")
+    assert len(wire.get_segments()) == 4 * 4 + 5 * 3 + 4 * 3
     sensors = [ln for ln in ax.lines if ln.get_label() == "z sensors"][0]
     np.testing.assert_allclose(np.c_[sensors.get_xdata(), sensors.get_ydata()],
                                geo.xyz[:, :2] * 1e3)
