@@ -19,6 +19,8 @@ from mvtk import testing as T
 from mvtk.study import run
 
 ROOT = Path(__file__).resolve().parents[2]
+# one study run (FE, damping, updating, super element, report): about 10 s
+pytestmark = pytest.mark.slow
 PLATE = ROOT / "data" / "structures" / "plate.toml"
 
 #: text written for the smart-beam example (the seed paper, its tests and materials)
