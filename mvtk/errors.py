@@ -15,18 +15,21 @@ __all__ = [
     "MvtkError",
     "FormatError",
     "UnsupportedFormatError",
+    "DoubleHitError",
     "DimensionError",
     "UnitsError",
     "ConfigError",
     "ParameterError",
     "ConvergenceError",
     "MissingDependencyError",
+    "OutputError",
     "MvtkWarning",
     "DataRepairWarning",
     "ResolutionWarning",
     "ModeOverlapWarning",
     "IdentifiabilityWarning",
     "AccuracyWarning",
+    "ModelWarning",
 ]
 
 
@@ -36,6 +39,10 @@ class MvtkError(Exception):
 
 class FormatError(MvtkError, ValueError):
     """A file (or in-memory object) does not have the expected content or layout."""
+
+
+class DoubleHitError(FormatError):
+    """Every impact record of a measurement holds a second force pulse (a double hit)."""
 
 
 class UnsupportedFormatError(FormatError):
@@ -66,6 +73,14 @@ class MissingDependencyError(MvtkError, ImportError):
     """An optional dependency needed for this feature is not installed."""
 
 
+class OutputError(MvtkError, OSError):
+    """An output file could not be written, or would replace an input file.
+
+    The message names the file and the cause (disk full, file-size limit, permission,
+    the output being one of the inputs); the previous file is unchanged.
+    """
+
+
 class MvtkWarning(UserWarning):
     """Base class of every warning issued by mvtk."""
 
@@ -88,3 +103,8 @@ class IdentifiabilityWarning(MvtkWarning):
 
 class AccuracyWarning(MvtkWarning):
     """A result is outside the range where the method is known to be accurate."""
+
+
+class ModelWarning(MvtkWarning):
+    """A structural model looks implausible (units, mesh density, cracks); the message
+    names the entity and the likely cause."""

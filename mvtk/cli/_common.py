@@ -19,7 +19,8 @@ import numpy as np
 
 from ..errors import ConfigError, MvtkError
 
-__all__ = ["run_view", "json_document", "json_clean", "check_output_file",
+__all__ = ["run_view", "json_document", "json_clean", "check_output_file", "refuse_inputs",
+           "study_inputs", "refuse_inputs_in_folder",
            "add_cache_argument", "StageError", "SCHEMA_VERSIONS", "parse_option",
            "add_reader_options", "reader_options"]
 
@@ -78,6 +79,72 @@ def check_output_file(path: str | Path, option: str) -> Path:
         raise ConfigError(f"{option} {str(p)!r}: cannot write in {str(parent)!r} "
                           f"({err.strerror or err})") from None
     return p
+
+
+def refuse_inputs(outputs, inputs) -> None:
+    """Refuse every output path that is one of the input files (before any work).
+
+    Parameters
+    ----------
+    outputs : iterable of (str, path)
+        ``(option, path)`` of each output file (``path`` None: not requested).
+    inputs : iterable of path
+        Every file the command reads.
+
+    Raises
+    ------
+    OutputError
+        Naming the option, the output and the input it would replace (symlinks and hard
+        links followed); no option lifts this.
+    """
+    from .._atomic import refuse_input, same_file
+
+    inputs = [p for p in inputs if p is not None]
+    given = [(opt, p) for opt, p in outputs if p is not None]
+    for opt, p in given:
+        refuse_input(p, inputs, opt)
+    for i, (opt_a, a) in enumerate(given):
+        for opt_b, b in given[i + 1:]:
+            if same_file(a, b):
+                from ..errors import OutputError
+
+                raise OutputError(f"{opt_a} and {opt_b} name one file {str(a)!r}: give "
+                                  "each output its own path")
+
+
+def study_inputs(study_path) -> list[Path]:
+    """Every file a study reads (:attr:`mvtk.study.Study.input_files`)."""
+    from ..study import load_study
+
+    return list(load_study(study_path).input_files)
+
+
+def refuse_inputs_in_folder(folder, inputs, option: str = "--out") -> None:
+    """Refuse an output folder whose written files would replace an input.
+
+    The files a run writes into ``folder`` are ``index.html``, ``report.pdf``,
+    ``manifest.json`` and everything below ``tables/`` and ``cache/``.
+
+    Raises
+    ------
+    OutputError
+        An input file is, or lies where, one of those outputs goes.
+    """
+    from .._atomic import same_file
+    from ..errors import OutputError
+
+    out = Path(folder)
+    written = [out / n for n in ("index.html", "report.pdf", "manifest.json")]
+    subdirs = [(out / d).resolve() for d in ("tables", "cache")]
+    for src in inputs:
+        src = Path(src)
+        real = src.resolve()
+        if any(same_file(src, w) for w in written) or any(
+                real.is_relative_to(d) for d in subdirs):
+            raise OutputError(f"{option} {str(folder)!r} would overwrite the input file "
+                              f"{str(src)!r} (a run writes index.html, report.pdf, "
+                              "manifest.json, tables/ and cache/ there): give another "
+                              "output folder")
 
 
 def add_cache_argument(p: argparse.ArgumentParser) -> None:

@@ -41,6 +41,38 @@ def add_parser(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+def _uff_sensors(path, geo):
+    """Sensors of a UFF geometry: the response DOFs of its FRF records (UFF 58) at the
+    geometry's nodes, else one global +z sensor per node (marked ``default +z``)."""
+    import warnings
+
+    import numpy as np
+
+    from ..correlation._geometry import Sensor, _make_sensor
+    from ..errors import MvtkError
+
+    if not str(path).lower().endswith((".uff", ".unv", ".uf")):
+        return geo
+    dofs = []
+    try:
+        from .. import io
+        from ..modal._frf import as_frf_matrix
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")   # the node datasets are "not measurement data"
+            h = as_frf_matrix(io.read(path))
+        known = set(np.asarray(geo.node).tolist())
+        dofs = sorted({(int(n), str(d)) for n, d in zip(h["node"].values, h["direction"].values)
+                       if int(n) in known})
+    except (MvtkError, KeyError, ValueError):
+        dofs = []
+    if dofs:   # measured DOFs of the file itself
+        return geo.with_sensors([_make_sensor(n, d, f"{path}: FRF records", "file")
+                                 for n, d in dofs])
+    return geo.with_sensors([Sensor(int(n), "+z", None, False, "default +z")
+                             for n in geo.node])
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk correlate``; errors propagate as MvtkError."""
     from ..correlation._correlate import correlate
@@ -49,9 +81,14 @@ def run(args: argparse.Namespace) -> int:
     from ..fe import build_model, modal_analysis
 
     geo = read_test_geometry(args.geometry, units_scale=args.units_scale)
+    if not geo.sensors:
+        geo = _uff_sensors(args.geometry, geo)
     n_default = sum(s.source == "default +z" for s in geo.sensors)
     if n_default:
-        sys.stderr.write(f"notice: {args.geometry} has no 'directions' column: one global +z "
+        what = "has no 'directions' column"
+        if str(args.geometry).lower().endswith((".uff", ".unv", ".uf")):
+            what = "holds nodes but no measured DOFs (no UFF 58 records)"
+        sys.stderr.write(f"notice: {args.geometry} {what}: one global +z "
                          f"sensor assumed at each of its {n_default} nodes (column "
                          "direction_source)\n")
     model = build_model(args.structure)

@@ -12,7 +12,14 @@ __all__ = ["add_parser"]
 
 def _init(args: argparse.Namespace) -> int:
     from ..study._init import init_study
-    from ._common import reader_options
+    from ._common import reader_options, refuse_inputs
+
+    folder = Path(args.folder)
+    writes = [("study.toml", folder / "study.toml")]
+    if args.structure is None or Path(args.structure).suffix.lower() != ".toml":
+        writes.append(("structure.toml", folder / "structure.toml"))
+    refuse_inputs([("output", p) for _, p in writes],
+                  [args.structure, *args.measurements, args.geometry])
 
     res = init_study(args.folder, structure=args.structure, measurements=args.measurements,
                      name=args.name, overwrite=args.force, read_options=reader_options(args),

@@ -21,9 +21,12 @@ def add_parser(subparsers) -> None:
         "modal",
         help=COMMANDS["modal"].help,
         description="Read measurement files (mvtk.io.read) and identify modes. FRF files "
-        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix and "
+        "(UFF 58 FRF records, complex FRF columns) are merged into one FRF matrix by "
+        "response and reference node/direction and "
         "identified by pLSCF + LSFD; time histories with a force channel give H1 FRFs "
-        "(several files = several measurement sets, merged by node/direction); time "
+        "(several files = several measurement sets, merged by node/direction; impact sets "
+        "share one record and window, double hits and clipping are reported; a roving "
+        "hammer is turned by reciprocity); time "
         "histories without force are identified output-only by SSI-cov. Prints the mode "
         "table with quality columns (stability count, MPC, MPD, reliable, reason).",
     )
@@ -67,58 +70,90 @@ def _read_options(path, df_hz=None, options=None) -> dict:
 
 
 def load_frf(paths, *, df_hz=None, frf_type=None, options=None):
-    """FRF matrix from one or several FRF files, merged along the responses.
+    """FRF matrix from one or several FRF files, merged by node/direction
+    (:func:`mvtk.modal.merge_frf`: one file per reference, or per response group).
 
     ``options`` are reader options (:func:`mvtk.io.read` keywords) applied to every file.
     """
-    import numpy as np
-    import xarray as xr
-
     from .. import io
-    from ..errors import DimensionError
-    from ..modal._frf import as_frf_matrix
+    from ..modal._frf import as_frf_matrix, merge_frf
 
-    mats = []
-    for p in paths:
-        mats.append((p, as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)),
-                                      frf_type=frf_type)))
-    if len(mats) == 1:
-        return mats[0][1]
-    f0 = mats[0][1]["frequency"].values
-    nref = mats[0][1].sizes["reference"]
-    parts = []
-    for p, h in mats:
-        f = h["frequency"].values
-        if f.shape != f0.shape or not np.allclose(f, f0) or h.sizes["reference"] != nref:
-            raise DimensionError(
-                f"{p}: {h.sizes['reference']} reference(s) x {f.size} lines up to "
-                f"{f[-1]:g} Hz; expected the {nref} reference(s) and {f0.size} lines of "
-                f"{mats[0][0]}"
-            )
-        names = [str(r) for r in h["response"].values]
-        if len(mats) > 1:
-            names = [f"{Path(p).stem}:{r}" if r in ("", "reference") or int(n) < 0 else r
-                     for r, n in zip(names, h["node"].values)]
-        parts.append(h.assign_coords(response=names, reference=mats[0][1]["reference"].values,
-                                     reference_node=mats[0][1]["reference_node"],
-                                     reference_direction=mats[0][1]["reference_direction"],
-                                     reference_quantity=mats[0][1]["reference_quantity"],
-                                     reference_units=mats[0][1]["reference_units"],
-                                     frequency=f0))
-    out = xr.concat(parts, dim="response", coords="minimal", compat="override",
-                    combine_attrs="override")
-    return as_frf_matrix(out)
+    mats = [as_frf_matrix(io.read(p, **_read_options(p, df_hz, options)), frf_type=frf_type)
+            for p in paths]
+    return merge_frf(mats, [Path(p).name for p in paths])
+
+
+#: Highest ``--orders x n_reference`` accepted (pLSCF): the stabilisation diagram's cost
+#: grows about as the order squared to cubed (300 poles per order: about a minute for
+#: 13 FRFs of 3201 lines on one core); the default orders stop at 160.
+MAX_POLES_PER_ORDER = 400
+#: Fewest samples per FRF segment (``--nperseg``): N samples give N/2 + 1 lines.
+MIN_NPERSEG = 8
+
+
+def _check_orders(h, args) -> None:
+    """Refuse ``--orders`` the band's lines cannot support, or beyond the runtime cap."""
+    from ..errors import ParameterError
+
+    if args.orders is None:
+        return
+    f = h["frequency"].values
+    lo = -float("inf") if args.fmin is None else args.fmin
+    hi = float("inf") if args.fmax is None else args.fmax
+    lines = int(((f >= lo) & (f <= hi)).sum())
+    ni = h.sizes["reference"]
+    most = min(lines // (2 * ni), MAX_POLES_PER_ORDER // ni)
+    if args.orders > most:
+        why = (f"the band holds {lines} lines for {ni} reference(s) and pLSCF needs at "
+               "least 2 lines per pole" if lines // (2 * ni) <= MAX_POLES_PER_ORDER // ni
+               else f"above {MAX_POLES_PER_ORDER} poles per order the stabilisation "
+               "diagram takes many minutes to hours (without --orders the order is "
+               "chosen from the peaks of the band)")
+        raise ParameterError(f"--orders {args.orders}: {why}; expected --orders <= {most}")
+
+
+def _check_output_only(args, th) -> None:
+    """Refuse what SSI-cov cannot use: more files, --uff-frf, constant channels."""
+    import numpy as np
+
+    from ..errors import ParameterError
+
+    if len(args.files) > 1:
+        raise ParameterError(
+            f"{args.files[0]} has no force channel: output-only identification (SSI-cov) "
+            f"uses one record, got {len(args.files)} files ({', '.join(args.files[1:])} "
+            "would be ignored); run them one at a time, or name the force channel with "
+            "--reference for a multi-set FRF test")
+    if args.uff_frf:
+        raise ParameterError(
+            f"--uff-frf: {args.files[0]} has no force channel, so output-only "
+            "identification gives no FRFs to write; use --uff-modes for the modes")
+    data = np.asarray(th.values, dtype=float)
+    cdim = th.dims[0]
+    flat = [str(c) for c, row in zip(th[cdim].values, data)
+            if not np.all(np.isfinite(row)) or np.ptp(row) == 0]
+    if flat and len(flat) == data.shape[0]:
+        raise ParameterError(f"{args.files[0]}: every channel is constant or not finite "
+                             f"({', '.join(flat)}); no vibration to identify")
+    if flat:
+        raise ParameterError(f"{args.files[0]}: channel(s) {', '.join(flat)} are constant or "
+                             "hold non-finite values; drop them (e.g. --set channels=...) "
+                             "for output-only identification")
 
 
 def _identify(args):
-    import numpy as np
-
     from .. import io
-    from ..modal._frf import frf_matrix
+    from ..errors import ParameterError
+    from ..modal._frf import frf_of_sets
     from ..modal._identify import identify
     from ..modal._ssi import identify_output_only
     from ._common import reader_options
 
+    if args.nperseg is not None and args.nperseg < MIN_NPERSEG:
+        raise ParameterError(f"--nperseg {args.nperseg}: expected at least {MIN_NPERSEG} "
+                             "samples per segment (N samples give N/2 + 1 frequency lines)")
+    if args.orders is not None and args.orders < 2:
+        raise ParameterError(f"--orders {args.orders}: expected a model order >= 2")
     options = reader_options(args)
     first = io.read(args.files[0], **_read_options(args.files[0], args.df_hz, options))
     orders = None if args.orders is None else range(2, args.orders + 1)
@@ -128,15 +163,18 @@ def _identify(args):
                                                             th["quantity"].values}
         if has_force or args.reference is not None:
             sets = [first] + [io.read(p, **options) for p in args.files[1:]]
-            ref = args.reference if args.reference is not None else {"quantity": "force"}
-            h = frf_matrix(sets, ref, excitation="impact" if args.impact else args.excitation,
-                           nperseg=args.nperseg)
+            # the study's path: a roving hammer is turned by reciprocity
+            h = frf_of_sets(sets, args.reference,
+                            excitation="impact" if args.impact else args.excitation,
+                            nperseg=args.nperseg)
+            _check_orders(h, args)
             return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
+        _check_output_only(args, th)
         ssi_orders = range(2, 61, 2) if args.orders is None else range(2, args.orders + 1, 2)
         return identify_output_only(first, args.fmin, args.fmax, orders=ssi_orders,
                                     fn_hz=args.fn)
     h = load_frf(args.files, df_hz=args.df_hz, frf_type=args.frf_type, options=options)
-    del np
+    _check_orders(h, args)
     return identify(h, args.fmin, args.fmax, orders=orders, fn_hz=args.fn)
 
 
@@ -145,6 +183,13 @@ def run(args: argparse.Namespace) -> int:
     from ._common import spare_dask_probe
 
     spare_dask_probe()
+    from ._common import check_output_file, refuse_inputs
+
+    outputs = [("--uff-modes", args.uff_modes), ("--uff-frf", args.uff_frf)]
+    for opt, path in outputs:
+        if path:
+            check_output_file(path, opt)
+    refuse_inputs(outputs, args.files)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         modes = _identify(args)
@@ -164,6 +209,9 @@ def run(args: argparse.Namespace) -> int:
                "modes": json.loads(table.to_json(orient="records")),
                "frf_correlation": (None if modes.correlation is None
                                    else modes.correlation.attrs["overall"])}
+        if modes.frf is not None and modes.frf.attrs.get("set_quality"):
+            out["set_quality"] = json.loads(modes.frf.attrs["set_quality"])
+            out["window_policy"] = modes.frf.attrs.get("window_policy", "")
         sys.stdout.write(json.dumps(out) + "\n")
         return 0
     sys.stdout.write(f"{modes.method}: {modes.n_modes} mode(s) in "

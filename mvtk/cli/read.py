@@ -41,11 +41,12 @@ def _run(args: argparse.Namespace) -> int:
 
     from ..errors import MvtkError
     from ..io import read, write
-    from ._common import check_output_file
+    from ._common import check_output_file, refuse_inputs
 
     try:
         if args.output:
             check_output_file(args.output, "--output")  # before reading
+            refuse_inputs([("--output", args.output)], [args.path])
         ds = read(args.path, **reader_options(args))
         print(summary(ds))
         if args.output:

@@ -65,16 +65,19 @@ def run_update(args: argparse.Namespace) -> int:
     """Entry point of ``mvtk update``; returns the exit code (0 ok, 1 not converged)."""
     import tomli_w
 
-    from ._common import check_output_file, json_document, run_view
+    from ._common import check_output_file, json_document, refuse_inputs, run_view, study_inputs
 
     if args.out is not None:
         check_output_file(args.out, "--out")
+        refuse_inputs([("--out", args.out)], study_inputs(args.study))
     overrides = {("updating", "max_iter"): args.max_iter} if args.max_iter is not None else None
     res = run_view(args.study, ["updating"], args.cache, overrides)
     up = res.results["updating"]
     summary = dict(up["summary"])
     if args.out is not None:
-        Path(args.out).write_text(tomli_w.dumps(up["description"]), encoding="utf-8")
+        from .._atomic import write_text
+
+        write_text(args.out, tomli_w.dumps(up["description"]))
     if args.json:
         body = {**summary, "warnings": up["warnings"],
                 "cached": "updating" in res.cache_hits}

@@ -57,6 +57,7 @@ from ._metrics import (
     voltage_stats,
 )
 from ._modal import cantilever_modal_plant, modal_plant
+from ._piezo import piezo_plant
 from ._plant import StructuralPlant, dof_load, dof_output, structural_plant
 from ._second_order import SecondOrderSystem
 from ._simulate import Disturbance, closed_loop, release_state, simulate
@@ -77,6 +78,7 @@ __all__ = [
     "StateSpace",
     "StructuralPlant",
     "structural_plant",
+    "piezo_plant",
     "dof_load",
     "dof_output",
     "modal_plant",

@@ -451,13 +451,34 @@ class LQR:
     Minimises the integral of ``x'Qx + u'Ru``. ``Q=None`` on a second-order plant uses the
     energy weighting ``blkdiag(K, M)`` (``x'Qx`` = twice the mechanical energy) times
     ``q_scale``. Needs the full plant state (no observer).
+
+    ``actuator`` may name several plant inputs (e.g. the voltages of several piezo
+    patches): :meth:`gain_matrix` then solves the multi-input Riccati equation with
+    ``R`` times the identity and :meth:`closed_loop_poles` gives the poles of
+    ``A - B K``; connecting it to a plant for simulation (:meth:`realize`) takes one
+    actuator.
     """
 
     R: float = 1.0
     Q: np.ndarray | None = None
     q_scale: float = 1.0
-    actuator: str | None = None
+    actuator: str | Sequence[str] | None = None
     u_max: float | None = None
+
+    def _inputs(self, ss: StateSpace) -> list[int]:
+        if self.actuator is None or isinstance(self.actuator, str):
+            return [_index(ss.inputs, self.actuator, "input")]
+        acts = [_index(ss.inputs, a, "input") for a in self.actuator]
+        if not acts or len(set(acts)) != len(acts):
+            raise ParameterError(f"LQR actuators must be distinct plant inputs, got "
+                                 f"{list(self.actuator)!r}")
+        return acts
+
+    def closed_loop_poles(self, plant) -> np.ndarray:
+        """Poles (rad/s) of ``A - B K`` with every actuator of :meth:`gain_matrix`."""
+        ss = plant_state_space(plant)
+        b = ss.B[:, self._inputs(ss)]
+        return np.linalg.eigvals(ss.A - b @ self.gain_matrix(plant))
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.R) and self.R > 0):
@@ -467,9 +488,10 @@ class LQR:
         _check_u_max(self.u_max)
 
     def gain_matrix(self, plant) -> np.ndarray:
-        """State-feedback gain K (1, n_states) from the continuous Riccati equation."""
+        """State-feedback gain K (n_actuators, n_states) from the continuous Riccati
+        equation."""
         ss = plant_state_space(plant)
-        act = _index(ss.inputs, self.actuator, "input")
+        acts = self._inputs(ss)
         n = ss.n_states
         if self.Q is None:
             if not isinstance(plant, SecondOrderSystem):
@@ -479,15 +501,20 @@ class LQR:
             Q = np.asarray(self.Q, dtype=float) * self.q_scale
             if Q.shape != (n, n):
                 raise DimensionError(f"LQR Q must have shape ({n}, {n}), got {Q.shape}")
-        b = ss.B[:, [act]]
-        with small_dense(2 * n + 1):  # the QZ of the (2n+1) pencil: one BLAS thread
-            P = scipy.linalg.solve_continuous_are(ss.A, b, Q, np.array([[self.R]]))
+        b = ss.B[:, acts]
+        with small_dense(2 * n + len(acts)):  # the QZ of the pencil: one BLAS thread
+            P = scipy.linalg.solve_continuous_are(ss.A, b, Q, self.R * np.eye(len(acts)))
         return (b.T @ P) / self.R
 
     def realize(self, plant, design_plant=None) -> FeedbackLaw:
         """Connect to ``plant`` (gain computed on ``design_plant`` if given, same states)."""
         ss = plant_state_space(plant)
-        act = _index(ss.inputs, self.actuator, "input")
+        if not (self.actuator is None or isinstance(self.actuator, str)):
+            if len(self.actuator) != 1:
+                raise ParameterError(
+                    f"LQR with {len(self.actuator)} actuators: the feedback law of a "
+                    "simulation drives one input; use gain_matrix / closed_loop_poles")
+        act = self._inputs(ss)[0]
         Kg = self.gain_matrix(design_plant if design_plant is not None else plant)
         if Kg.shape[1] != ss.n_states:
             raise DimensionError(

@@ -496,7 +496,9 @@ class TestGeometry:
 
         text = tomli_w.dumps(self.to_dict())
         if path is not None:
-            Path(path).write_text(text, encoding="utf-8")
+            from .._atomic import write_text
+
+            write_text(Path(path), text)
         return text
 
 
@@ -558,13 +560,21 @@ def read_test_geometry(source: str | Path | Mapping[str, Any], *, units_scale: f
     UnsupportedFormatError
         Unknown file extension.
     """
+    if isinstance(units_scale, bool) or not isinstance(units_scale, int | float) or not (
+            np.isfinite(units_scale) and units_scale > 0):
+        raise ParameterError(f"units_scale: expected a positive factor (1 for m, 1e-3 for mm), "
+                             f"got {units_scale!r}")
     if isinstance(source, Mapping):
         geo = _from_mapping(source, "test geometry", units_scale)
     else:
         path = Path(source)
         ext = path.suffix.lower()
         if not path.is_file():
-            raise FormatError(f"{path}: test geometry file not found")
+            from .._atomic import special_file
+
+            kind = special_file(path)
+            raise FormatError(f"{path}: test geometry file " + (
+                "not found" if kind is None else f"is {kind}, expected a regular file"))
         if ext in (".uff", ".unv", ".uf"):
             geo = _from_uff(path, units_scale)
         elif ext == ".toml":
@@ -602,11 +612,26 @@ def _vec3(v: Any, where: str) -> np.ndarray:
     return np.array([_num(x, f"{where}[{i}]") for i, x in enumerate(v)])
 
 
+_ENTRY_KEYS = {
+    "coordinate_systems": {"id", "origin", "type", "axes", "x_point", "xz_point", "name"},
+    "nodes": {"node", "x", "y", "z", "cs"},
+    "lines": {"nodes"},
+    "sensors": {"node", "direction", "vector", "rotation", "triaxial"},
+}
+
+
 def _from_mapping(d: Mapping[str, Any], where: str, scale: float) -> TestGeometry:
     allowed = {"name", "coordinate_systems", "nodes", "lines", "sensors"}
     unknown = set(d) - allowed
     if unknown:
         raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(allowed)}")
+    for table, keys in _ENTRY_KEYS.items():
+        entries = d.get(table, [])
+        for i, e in enumerate(entries if isinstance(entries, Sequence) else []):
+            extra = sorted(set(e) - keys) if isinstance(e, Mapping) else []
+            if extra:
+                raise ConfigError(f"{where}: {table}[{i}]: unknown keys {extra}; allowed: "
+                                  f"{sorted(keys)}")
     systems: dict[int, CoordinateSystem] = {}
     for i, c in enumerate(d.get("coordinate_systems", [])):
         w = f"{where}: coordinate_systems[{i}]"

@@ -117,13 +117,26 @@ def read_test_shapes(path: str | Path, geometry) -> xr.DataArray:
             raise FormatError(f"{path}: cannot read a shapes DataArray ({err})") from err
         if da is not None:
             if set(da.dims) == {"mode", "dof"}:
-                return da.transpose("mode", "dof")
+                return _finite(da.transpose("mode", "dof"), path)
             if set(da.dims) == {"mode", "node", "component"}:
-                return shapes_at_sensors(da, geometry, source=str(path))
+                return _finite(shapes_at_sensors(da, geometry, source=str(path)), path)
             raise FormatError(f"{path}: a DataArray with dims {da.dims}; expected ('mode', "
                               "'dof') or ('mode', 'node', 'component')")
     ds = mvtk.io.read(path)
     if "mode_shape" not in ds:
         raise FormatError(f"{path}: no mode shapes (variables {list(ds.data_vars)}); expected "
                           "UFF 55 records or a ('mode', 'dof') netCDF DataArray")
-    return shapes_at_sensors(ds["mode_shape"], geometry, source=str(path))
+    return _finite(shapes_at_sensors(ds["mode_shape"], geometry, source=str(path)), path)
+
+
+def _finite(da: xr.DataArray, path: Path) -> xr.DataArray:
+    """``da``, or FormatError naming the first mode and DOF whose value is not finite."""
+    bad = ~np.isfinite(np.asarray(da.values))
+    if bad.any():
+        m, k = (int(v[0]) for v in np.nonzero(bad))
+        n = int(bad.any(axis=1).sum())
+        value = np.asarray(da.values)[m, k].item()
+        raise FormatError(f"{path}: shape value of mode {da['mode'].values[m]!s} at DOF "
+                          f"{da['dof'].values[k]!s} is {value!r} ({int(bad.sum())} "
+                          f"non-finite value(s) in {n} mode(s)); a MAC needs every value")
+    return da

@@ -540,7 +540,11 @@ def envelope_fit(
 
     def fit_one(name, sig, guess, b):
         rebound = None
+        if not np.any(np.asarray(sig) != np.asarray(sig).flat[0]):
+            raise _ChannelFailure("the record is constant (no decay to fit)")
         t, env, phase = _envelope(sig, fs, guess, b, method, trim)
+        if env.size and not np.max(env) > 0:
+            raise _ChannelFailure("the envelope is zero throughout (no decay to fit)")
         if env.size < 8:
             raise _ChannelFailure(
                 f"{env.size} envelope points above {threshold:g} x the initial envelope; "
@@ -604,6 +608,8 @@ def _envelope(sig, fs, guess, band, method, trim):
 
 
 def _fit_envelope(t, env, phase):
+    if not np.all(env > 0):
+        raise _ChannelFailure("the envelope reaches zero inside the fitted range")
     slope, se, _, res = _linfit(t, np.log(env), env**2)
     sigma, sigma_se = -slope, se
     if phase is not None:

@@ -8,6 +8,16 @@ from ._assembly import (
     sparsity_pattern,
 )
 from ._beam import BeamPatch, BeamSection, beam_section, cantilever_beam
+from ._electro import (
+    Electrode,
+    PiezoCoupling,
+    ShellPiezoPatch,
+    modal_emcc,
+    piezo_coupling,
+    ply_piezo_constants,
+    select_region,
+)
+from ._frames import CoordinateSystem
 from ._general import (
     GENERAL_SUPPORTS,
     BeamSet,
@@ -19,7 +29,23 @@ from ._general import (
     support_dofs,
 )
 from ._laminate import Laminate
-from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._loads import (
+    StaticSolution,
+    gravity_load,
+    gravity_nodal,
+    nodal_load,
+    pressure_load,
+    pressure_nodal,
+    static_solution,
+)
+from ._materials import (
+    IsotropicMaterial,
+    OrthotropicMaterial,
+    OrthotropicPiezoMaterial,
+    PiezoMaterial,
+    Ply,
+    is_piezo,
+)
 from ._matrices import read_matrices
 from ._mesh import (
     SUPPORT_TYPES,
@@ -53,7 +79,7 @@ from ._modal import (
     static_solve,
 )
 from ._model import DOF_NAMES, FEModel
-from ._nastran import read_nastran
+from ._nastran import read_bulk_cards, read_nastran
 from ._op4 import Op4Matrix, read_op4
 from ._piezo import (
     PiezoPatch,
@@ -82,6 +108,7 @@ from ._solvers import (
     fill_reducing_ordering,
 )
 from ._structure import build_model, constrain_model, get_by_path, load_structure, set_by_path
+from ._structure_loads import load_vector
 
 __all__ = [
     "DOF_NAMES",
@@ -98,6 +125,15 @@ __all__ = [
     "IsotropicMaterial",
     "OrthotropicMaterial",
     "PiezoMaterial",
+    "OrthotropicPiezoMaterial",
+    "is_piezo",
+    "Electrode",
+    "ShellPiezoPatch",
+    "PiezoCoupling",
+    "piezo_coupling",
+    "ply_piezo_constants",
+    "modal_emcc",
+    "select_region",
     "Ply",
     "Laminate",
     "DRILL_FACTOR",
@@ -143,6 +179,16 @@ __all__ = [
     "write_uff",
     "read_matrices",
     "AffineModel",
+    "read_bulk_cards",
+    "StaticSolution",
+    "gravity_load",
+    "gravity_nodal",
+    "nodal_load",
+    "pressure_load",
+    "pressure_nodal",
+    "static_solution",
+    "CoordinateSystem",
+    "load_vector",
     "read_nastran",
     "read_op4",
     "Op4Matrix",

@@ -57,6 +57,7 @@ from ..errors import DimensionError, ParameterError
 from ._assembly import assemble_element_matrices, sparsity_pattern
 from ._beam import BeamSection, _global_matrices, _section_array
 from ._laminate import Laminate
+from ._mitc9 import mitc9_matrices
 from ._model import DOF_NAMES, FEModel
 from ._shell import DRILL_FACTOR
 from ._shell3d import shell_element_matrices, shell_frames
@@ -127,9 +128,10 @@ class ShellSet:
 
     Parameters
     ----------
-    elements : array_like of int, shape (n_el, 3) or (n_el, 4)
-        Node indices: triangles (MITC3) or quadrilaterals (MITC4), counter-clockwise about
-        the intended normal.
+    elements : array_like of int, shape (n_el, 3), (n_el, 4) or (n_el, 9)
+        Node indices: triangles (MITC3), quadrilaterals (MITC4) or nine-node curved
+        quadrilaterals (MITC9, :mod:`mvtk.fe._mitc9`: corners, mid-sides, centre),
+        counter-clockwise about the intended normal.
     section : Laminate
         Layers bottom (-normal side) to top; ply angles from the material axis.
     material_axis : array_like (3,) or (n_el, 3)
@@ -150,9 +152,10 @@ class ShellSet:
 
     def __post_init__(self) -> None:
         el = np.asarray(self.elements, dtype=np.int64)
-        if el.ndim != 2 or el.shape[1] not in (3, 4):
+        if el.ndim != 2 or el.shape[1] not in (3, 4, 9):
             raise DimensionError(
-                f"shell set {self.name!r}: elements must have shape (n, 3) or (n, 4), "
+                f"shell set {self.name!r}: elements must have shape (n, 3) or (n, 4) "
+                "(or (n, 9): MITC9), "
                 f"got {el.shape}"
             )
         if not isinstance(self.section, Laminate):
@@ -233,12 +236,16 @@ class PointMass:
         the diagonal.
     offset : array_like (3,)
         Vector from the node to the mass centre (m).
+    frame : array_like (3, 3), optional
+        Axes (rows, global components) in which ``inertia`` is given; the global
+        tensor is ``R' J R``. Default: global axes.
     """
 
     node: int
     mass: float
     inertia: Any = (0.0, 0.0, 0.0)
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    frame: Any = None
 
     def matrix(self) -> np.ndarray:
         """6x6 mass matrix at the node (global DOFs)."""
@@ -252,6 +259,12 @@ class PointMass:
                 f"point mass at node {self.node}: inertia must be 3 values or a symmetric "
                 f"positive semi-definite 3x3 matrix, got {self.inertia!r}"
             )
+        if self.frame is not None:
+            R = np.asarray(self.frame, dtype=float)
+            if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+                raise ParameterError(f"point mass at node {self.node}: frame must be an "
+                                     f"orthonormal (3, 3) matrix (rows = axes), got {R!r}")
+            J = R.T @ J @ R
         m = np.zeros((6, 6))
         m[:3, :3] = self.mass * np.eye(3)
         m[3:, 3:] = J
@@ -483,6 +496,74 @@ def _constraint_matrix(nodes: np.ndarray, links: Sequence[RigidLink]) -> tuple[
     return C, dependent
 
 
+def _check_conforming(nine: Sequence[np.ndarray], first: Sequence[ShellSet]) -> None:
+    """Refuse nine-node and first-order shells that share an edge (not conforming: the
+    nine-node edge is quadratic, the other linear)."""
+    if not nine or not first:
+        return
+    quad = np.concatenate([el[:, [j, (j + 1) % 4]] for el in nine for j in range(4)])
+    lin = np.concatenate([m.elements[:, [j, (j + 1) % m.elements.shape[1]]]
+                          for m in first for j in range(m.elements.shape[1])])
+    a = {tuple(e) for e in np.sort(quad, axis=1).tolist()}
+    shared = [e for e in np.sort(lin, axis=1).tolist() if tuple(e) in a]
+    if shared:
+        raise ParameterError(
+            f"{len(shared)} edges (e.g. nodes {shared[0]}) are shared by nine-node (MITC9) "
+            "and first-order shells; the two do not conform along an edge: mesh the whole "
+            "surface with one order")
+
+
+def _directors(nodes: np.ndarray, sets: Sequence[np.ndarray]) -> np.ndarray:
+    """Unit nodal directors of nine-node shells: the average of the surface normals of
+    the elements at each node (zero rows for other nodes)."""
+    out = np.zeros((len(nodes), 3))
+    if not sets:
+        return out
+    from ._mitc9 import NODE_RS, _shape
+
+    for el in sets:
+        x = nodes[el]
+        for i, (r, s) in enumerate(NODE_RS):
+            _, dr, ds = _shape(r, s)
+            n = np.cross(np.einsum("k,ekj->ej", dr, x), np.einsum("k,ekj->ej", ds, x))
+            np.add.at(out, el[:, i], n / np.linalg.norm(n, axis=1)[:, None])
+    norm = np.linalg.norm(out, axis=1)
+    used = norm > 0
+    out[used] /= norm[used, None]
+    return out
+
+
+def _frame_matrix(n_nodes: int, node_frames: Mapping[int, Any] | None,
+                  dependent: np.ndarray) -> sp.csr_matrix | None:
+    """Block-diagonal map from node-frame DOFs to global DOFs (None without frames)."""
+    if not node_frames:
+        return None
+    framed = np.zeros(6 * n_nodes, dtype=bool)
+    rows, cols, vals = [], [], []
+    for n, R in node_frames.items():
+        n = int(n)
+        if not 0 <= n < n_nodes:
+            raise ParameterError(f"node_frames: node {n} outside 0..{n_nodes - 1}")
+        R = np.asarray(R, dtype=float)
+        if R.shape != (3, 3) or not np.allclose(R @ R.T, np.eye(3), atol=1e-9):
+            raise ParameterError(f"node_frames: the frame of node {n} must be a (3, 3) "
+                                 f"orthonormal matrix (rows = axes), got {R!r}")
+        if np.any(dependent[6 * n:6 * n + 6]):
+            raise ParameterError(f"node {n} has a displacement frame and is dependent in a "
+                                 "rigid link; give it global axes")
+        framed[6 * n:6 * n + 6] = True
+        for off in (0, 3):  # u_global = R' u_local for translations and rotations
+            r, c = np.meshgrid(6 * n + off + np.arange(3), 6 * n + off + np.arange(3),
+                               indexing="ij")
+            rows.append(r.ravel())
+            cols.append(c.ravel())
+            vals.append(R.T.ravel())
+    plain = np.flatnonzero(~framed)
+    r, c, v = (np.concatenate([p] + a) for p, a in ((plain, rows), (plain, cols),
+                                                     (np.ones(len(plain)), vals)))
+    return sp.csr_matrix((v, (r, c)), shape=(6 * n_nodes, 6 * n_nodes))
+
+
 def assemble_model(
     nodes: np.ndarray,
     members: Sequence[ShellSet | BeamSet | PointMass | Spring | RigidLink],
@@ -493,6 +574,7 @@ def assemble_model(
     drill_factor: float = DRILL_FACTOR,
     name: str = "",
     meta: Mapping[str, Any] | None = None,
+    node_frames: Mapping[int, Any] | None = None,
 ) -> FEModel:
     """Assemble a general 3-D model of shells, beams, masses, springs and rigid links.
 
@@ -512,11 +594,20 @@ def assemble_model(
         Shell drilling penalty, see :mod:`mvtk.fe._shell`.
     name : str
     meta : mapping, optional
+    node_frames : mapping of node index to (3, 3) array, optional
+        Displacement frames: the rows are the unit axes (in global coordinates) in which
+        that node's six DOFs are measured (Nastran's GRID ``CD``). Supports, the
+        components of springs at that node and the model's DOFs of that node
+        (``dof_component``) refer to these axes: a support ``["ux"]`` on a node whose
+        frame is rotated is a skewed roller, ``["ux"]`` in a cylindrical frame a radial
+        support. Point masses and element matrices stay global; :meth:`FEModel.expand`
+        returns global components. Nodes with a frame cannot be dependent in a rigid link.
 
     Returns
     -------
     FEModel
-        ``elements`` holds ``"mitc4"``, ``"mitc3"``, ``"beam2"`` connectivities;
+        ``elements`` holds ``"mitc4"``, ``"mitc3"``, ``"mitc9"``, ``"beam2"``
+        connectivities;
         ``meta["element_sets"]`` maps each member set name to ``(type, indices)`` into
         those arrays; ``meta["unused_dofs"]`` the global DOFs removed for carrying
         neither stiffness nor mass; ``meta["recovery"]`` (with rigid links) the sparse
@@ -532,8 +623,9 @@ def assemble_model(
     for k, v in node_sets.items():
         if v.size and (v.min() < 0 or v.max() >= n_nodes):
             raise ParameterError(f"node set {k!r} refers to nodes outside 0..{n_nodes - 1}")
-    conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "beam2": []}
-    counts = {"mitc4": 0, "mitc3": 0, "beam2": 0}
+    conn: dict[str, list[np.ndarray]] = {"mitc4": [], "mitc3": [], "mitc9": [],
+                                         "beam2": []}
+    counts = {"mitc4": 0, "mitc3": 0, "mitc9": 0, "beam2": 0}
     element_sets: dict[str, tuple[str, np.ndarray]] = {}
     links = []
     shell_groups: list = []
@@ -550,9 +642,9 @@ def assemble_model(
                 raise ParameterError(f"{what} set {mbr.name!r}: node index outside "
                                      f"0..{n_nodes - 1}")
             if isinstance(mbr, ShellSet):
-                kind = "mitc4" if el.shape[1] == 4 else "mitc3"
+                kind = {3: "mitc3", 4: "mitc4", 9: "mitc9"}[el.shape[1]]
                 for start in range(0, len(el), _CHUNK):
-                    c = el[start:start + _CHUNK]
+                    c = el[start:start + _CHUNK, :min(el.shape[1], 4)]
                     np.add.at(normals, c.ravel(),
                               np.repeat(shell_frames(nodes[c])[:, 2], c.shape[1], axis=0))
                 shell_groups.append((kind, counts[kind] + np.arange(len(el)), mbr.laminate(),
@@ -596,9 +688,10 @@ def assemble_model(
         raise ParameterError(f"DOF {DOF_NAMES[g % 6]} of node {g // 6} is both supported and "
                              "dependent in a rigid link; support the independent node instead")
     keep = np.flatnonzero(~fixed & ~dependent)
-    # with rigid links: assemble on all DOFs, then K = T' K_full T; without: directly on
-    # the kept DOFs (entries on supported DOFs are dropped by the sparsity pattern)
-    if links:
+    frames = _frame_matrix(n_nodes, node_frames, dependent)
+    # with rigid links or frames: assemble on all DOFs, then K = T' K_full T; without:
+    # directly on the kept DOFs (entries on supported DOFs are dropped by the pattern)
+    if links or frames is not None:
         index, n_idx = np.arange(n_all), n_all
     else:
         index = np.full(n_all, -1, dtype=np.int64)
@@ -611,6 +704,10 @@ def assemble_model(
         return 0.5 * (A + np.swapaxes(A, 1, 2))
 
     K_parts, M_parts = [], []
+    nine = [m.elements for m in members if isinstance(m, ShellSet) and m.elements.shape[1] == 9]
+    _check_conforming(nine, [m for m in members if isinstance(m, ShellSet)
+                             and m.elements.shape[1] != 9])
+    directors = _directors(nodes, nine)
     for mbr in members:
         if isinstance(mbr, ShellSet):
             el = mbr.elements
@@ -624,10 +721,16 @@ def assemble_model(
             # in chunks: element matrices of large meshes never exist all at once
             for start in range(0, len(el), _CHUNK):
                 c = el[start:start + _CHUNK]
-                Ke, Me = shell_element_matrices(
-                    nodes[c], lam.ABD[None], lam.H[None],
-                    np.array([[lam.I0, lam.I1, lam.I2]]), np.full(len(c), lam.thickness),
-                    axis[start:start + _CHUNK] if axis.ndim == 2 else axis, drill_factor)
+                ax = axis[start:start + _CHUNK] if axis.ndim == 2 else axis
+                if el.shape[1] == 9:
+                    Ke, Me = mitc9_matrices(nodes[c], directors[c], lam.ABD, lam.H,
+                                            (lam.I0, lam.I1, lam.I2), lam.thickness, ax,
+                                            drill_factor)
+                else:
+                    Ke, Me = shell_element_matrices(
+                        nodes[c], lam.ABD[None], lam.H[None],
+                        np.array([[lam.I0, lam.I1, lam.I2]]), np.full(len(c), lam.thickness),
+                        ax, drill_factor)
                 pos = pattern.position[start * nd * nd:(start + len(c)) * nd * nd]
                 dk += np.bincount(pos, weights=sym(Ke).ravel(), minlength=pattern.nnz + 1)
                 dm += np.bincount(pos, weights=sym(Me).ravel(), minlength=pattern.nnz + 1)
@@ -657,7 +760,11 @@ def assemble_model(
         elif isinstance(mbr, Spring):
             nn = [mbr.node_a] if mbr.node_b is None else [mbr.node_a, mbr.node_b]
             dofs = (6 * np.asarray(nn)[:, None] + np.arange(6)).ravel()
-            K_parts.append(assemble_element_matrices(sym(mbr.matrix()[None]), dofs[None],
+            ke = mbr.matrix()
+            if frames is not None:  # spring components are those of the node frames
+                S = frames[dofs][:, dofs].toarray()
+                ke = S @ ke @ S.T
+            K_parts.append(assemble_element_matrices(sym(ke[None]), dofs[None],
                                                      index, n_idx))
 
     def total(parts):
@@ -667,8 +774,8 @@ def assemble_model(
         return out.tocsr()
 
     K, M = total(K_parts), total(M_parts)
-    if links:
-        T = C[:, keep].tocsc()
+    if links or frames is not None:
+        T = (C @ frames if frames is not None else C)[:, keep].tocsc()
         Kr = (T.T @ K @ T).tocsr()
         Mr = (T.T @ M @ T).tocsr()
     else:
@@ -684,7 +791,7 @@ def assemble_model(
         Kr, Mr, keep = Kr[sel][:, sel], Mr[sel][:, sel], keep[sel]
         if T is not None:
             T = T[:, sel]
-    if links:  # T' K T is symmetric to round-off only
+    if links or frames is not None:  # T' K T is symmetric to round-off only
         Kr = ((Kr + Kr.T) * 0.5).tocsr()
         Mr = ((Mr + Mr.T) * 0.5).tocsr()
     elements = {k: np.concatenate(v) for k, v in conn.items() if v}
@@ -692,7 +799,9 @@ def assemble_model(
                 "recovery": T.tocsr() if T is not None else None,
                 "supports": dict(supports or {}), "members": tuple(members),
                 "shell_groups": shell_groups, "beam_groups": beam_groups,
-                "drill_factor": drill_factor}
+                "drill_factor": drill_factor,
+                "node_frames": {int(k): np.asarray(v, float) for k, v in
+                                (node_frames or {}).items()}}
     out_meta.update(meta or {})
     return FEModel(nodes=nodes, M=Mr, K=Kr, dof_node=keep // 6, dof_component=keep % 6,
                    node_sets=node_sets, elements=elements, name=name, meta=out_meta,

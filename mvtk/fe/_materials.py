@@ -1,6 +1,6 @@
 """Materials and plies: the shared vocabulary of sections, shells, beams and piezo patches.
 
-All values in SI: Pa, kg/m^3, m, C/N (d31), F/m (permittivity).
+All values in SI: Pa, kg/m^3, m, C/N = m/V (d31, d32), F/m (permittivity).
 """
 
 from __future__ import annotations
@@ -11,7 +11,8 @@ import numpy as np
 
 from ..errors import ParameterError
 
-__all__ = ["IsotropicMaterial", "OrthotropicMaterial", "PiezoMaterial", "Ply"]
+__all__ = ["IsotropicMaterial", "OrthotropicMaterial", "PiezoMaterial",
+           "OrthotropicPiezoMaterial", "is_piezo", "Ply"]
 
 
 def _positive(name: str, **values: float) -> None:
@@ -96,22 +97,85 @@ class IsotropicMaterial(OrthotropicMaterial):
         return self.G12
 
 
+def _piezo_constants(name: str, d31: float, d32: float | None, eps33: float | None
+                     ) -> tuple[float, float, float | None]:
+    d31 = float(d31)
+    d32 = d31 if d32 is None else float(d32)
+    for key, v in (("d31", d31), ("d32", d32)):
+        if not np.isfinite(v):
+            raise ParameterError(f"material {name!r}: {key} must be a finite number (m/V), "
+                                 f"got {v!r}")
+    if d31 == 0.0 and d32 == 0.0:
+        raise ParameterError(f"material {name!r}: d31 and d32 are both zero; a piezo "
+                             "material needs a non-zero d31 (m/V)")
+    if eps33 is not None:
+        eps33 = float(eps33)
+        _positive(name, eps33=eps33)
+    return d31, d32, eps33
+
+
 @dataclass(frozen=True)
 class PiezoMaterial(IsotropicMaterial):
-    """Piezoceramic layer treated as an isotropic elastic solid plus a d31 actuation.
+    """Piezoceramic layer: isotropic elastic solid poled through its thickness.
 
     Parameters
     ----------
-    name, E, nu, rho : see :class:`IsotropicMaterial` (E = 1/s11^E, Pa)
+    name, E, nu, rho : see :class:`IsotropicMaterial` (E = 1/s11^E, Pa, at constant
+        electric field, i.e. short circuit)
     d31 : float
-        Piezoelectric charge constant (m/V = C/N), negative for PZT.
+        Piezoelectric charge constant (m/V = C/N), negative for PZT: in-plane strain
+        along material axis 1 per unit electric field along the poling direction.
+    d32 : float, optional
+        The same along material axis 2 (m/V); default ``d31`` (a poled ceramic is
+        transversely isotropic about its poling axis).
+    eps33 : float, optional
+        Permittivity at constant stress ``eps33^T`` (F/m), needed for the capacitance
+        and every electrical condition other than a driven voltage. Default: unknown.
     """
 
     d31: float = 0.0
+    d32: float = 0.0
+    eps33: float | None = None
 
-    def __init__(self, name: str, E: float, nu: float, rho: float, d31: float):
+    def __init__(self, name: str, E: float, nu: float, rho: float, d31: float,
+                 d32: float | None = None, eps33: float | None = None):
         super().__init__(name, E, nu, rho)
-        object.__setattr__(self, "d31", float(d31))
+        d31, d32, eps33 = _piezo_constants(name, d31, d32, eps33)
+        object.__setattr__(self, "d31", d31)
+        object.__setattr__(self, "d32", d32)
+        object.__setattr__(self, "eps33", eps33)
+
+
+@dataclass(frozen=True)
+class OrthotropicPiezoMaterial(OrthotropicMaterial):
+    """Orthotropic piezo ply poled through its thickness (e.g. a d31 macro-fibre composite).
+
+    Parameters
+    ----------
+    name, E1, E2, G12, G13, G23, nu12, rho : see :class:`OrthotropicMaterial` (at
+        constant electric field)
+    d31, d32 : float
+        In-plane strains along material axes 1 and 2 per unit field along the poling
+        direction (m/V).
+    eps33 : float, optional
+        Permittivity at constant stress (F/m).
+    """
+
+    d31: float = 0.0
+    d32: float = 0.0
+    eps33: float | None = None
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        d31, d32, eps33 = _piezo_constants(self.name, self.d31, self.d32, self.eps33)
+        object.__setattr__(self, "d31", d31)
+        object.__setattr__(self, "d32", d32)
+        object.__setattr__(self, "eps33", eps33)
+
+
+def is_piezo(material) -> bool:
+    """True for a material poled through the thickness (with d31/d32)."""
+    return isinstance(material, PiezoMaterial | OrthotropicPiezoMaterial)
 
 
 @dataclass(frozen=True)

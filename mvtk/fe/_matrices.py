@@ -20,7 +20,7 @@ import numpy as np
 import scipy.io
 import scipy.sparse as sp
 
-from ..errors import DimensionError, FormatError
+from ..errors import DimensionError, FormatError, ParameterError
 from ._model import DOF_NAMES, FEModel
 
 __all__ = ["read_matrices"]
@@ -50,6 +50,19 @@ def _op4_matrix(path: Path, key: str, name: str | None) -> sp.csr_matrix:
     return sp.csr_matrix(m, dtype=float)
 
 
+def _real(A, path: Path, key: str) -> sp.csr_matrix:
+    """``A`` as a real matrix; a complex one is refused (never its imaginary part dropped)."""
+    from ._sanity import check_matrices
+
+    if np.iscomplexobj(A.data):
+        try:
+            check_matrices(A if key == "K" else sp.csr_matrix(A.shape),
+                           A if key == "M" else sp.csr_matrix(A.shape), where=str(path))
+        except ParameterError as err:
+            raise FormatError(str(err)) from None
+    return sp.csr_matrix(A, dtype=float)
+
+
 def _load_matrix(path: Path, key: str):
     head, sep, tail = str(path).rpartition(":")
     name = None
@@ -65,8 +78,8 @@ def _load_matrix(path: Path, key: str):
             if key not in data:
                 raise FormatError(f"{str(path)!r}: no variable {key!r}; found "
                                   f"{sorted(k for k in data if not k.startswith('__'))}")
-            return sp.csr_matrix(data[key], dtype=float)
-        return sp.csr_matrix(scipy.io.mmread(path), dtype=float)
+            return _real(sp.csr_matrix(data[key]), path, key)
+        return _real(sp.csr_matrix(scipy.io.mmread(path)), path, key)
     except FormatError:
         raise
     except (ValueError, OSError) as err:
@@ -170,9 +183,14 @@ def read_matrices(K, M, dof_table, nodes=None, name: str = "") -> FEModel:
         the coordinate table.
     DimensionError
         Sizes that do not agree or a non-symmetric matrix.
+    ParameterError
+        A complex or non-finite matrix, or a negative diagonal term (names the DOF).
     """
     Km = _load_matrix(Path(K), "K") if isinstance(K, (str, Path)) else sp.csr_matrix(K)
     Mm = _load_matrix(Path(M), "M") if isinstance(M, (str, Path)) else sp.csr_matrix(M)
+    from ._sanity import check_matrices
+
+    check_matrices(Km, Mm, where=name or "assembled matrices")
     n = Km.shape[0]
     if Km.shape != (n, n) or Mm.shape != (n, n):
         raise DimensionError(f"K {Km.shape} and M {Mm.shape} must be square and equal")

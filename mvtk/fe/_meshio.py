@@ -4,7 +4,9 @@ Import
 ------
 :func:`read_mesh` reads any format meshio reads (Gmsh ``.msh``, Abaqus ``.inp``,
 VTK/VTU, MED, ...) into an :class:`ImportedMesh`: node coordinates, first-order cells
-(``tri3``, ``quad4``, ``line2``, ``vertex``) and named sets:
+(``tri3``, ``quad4``, ``line2``, ``vertex``), nine-node quadrilaterals (``quad9``: Gmsh
+second order, Abaqus S9R5; MITC9 shells; three-node lines become two two-node beams)
+and named sets:
 
 - Gmsh physical groups (``$PhysicalNames``) and meshio ``cell_sets`` (Abaqus ``*ELSET``,
   MED families) become **element sets**; each element set also defines a **node set**
@@ -37,6 +39,7 @@ from typing import Any
 
 import numpy as np
 
+from .._atomic import atomic_path, write_text
 from ..errors import FormatError, MissingDependencyError, ParameterError
 from ._beam import BeamSection
 from ._general import BeamSet, ShellSet, assemble_model
@@ -46,7 +49,8 @@ from ._model import FEModel
 __all__ = ["ImportedMesh", "read_mesh", "mesh_model", "write_vtu", "write_xdmf", "write_uff",
            "ShellSection", "BeamProperty"]
 
-_KINDS = {"triangle": "tri3", "quad": "quad4", "line": "line2", "vertex": "vertex"}
+_KINDS = {"triangle": "tri3", "quad": "quad4", "quad9": "quad9", "line": "line2",
+          "line3": "line2", "vertex": "vertex"}
 _MESHIO_NAME = {v: k for k, v in _KINDS.items()}
 
 
@@ -59,7 +63,8 @@ class ImportedMesh:
     nodes : ndarray (n_nodes, 3)
         Coordinates (m; the file's units are taken as metres).
     cells : dict of str to ndarray
-        Connectivity per kind: ``"tri3"`` (n, 3), ``"quad4"`` (n, 4), ``"line2"`` (n, 2),
+        Connectivity per kind: ``"tri3"`` (n, 3), ``"quad4"`` (n, 4), ``"quad9"`` (n, 9),
+        ``"line2"`` (n, 2),
         ``"vertex"`` (n, 1).
     element_sets : dict of str to dict of str to ndarray
         Per set name, the indices into ``cells[kind]`` for each kind it holds.
@@ -130,25 +135,33 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
     if nodes.shape[1] == 2:
         nodes = np.column_stack([nodes, np.zeros(len(nodes))])
     where = f"mesh {source!r}" if source else "mesh"
-    block_kind, block_offset = [], []
+    block_kind, block_offset, block_split = [], [], []
     cells: dict[str, list[np.ndarray]] = {}
     counts: dict[str, int] = {}
     for block in m.cells:
         kind = _KINDS.get(block.type)
+        split = block.type == "line3"  # three-node lines: two two-node beams each
+        if split:
+            kind = "line2"
         if kind is None:
             found = sorted({b.type for b in m.cells})
             raise FormatError(
                 f"{where}: cell type {block.type!r} is not supported; mvtk takes first-order "
-                f"shells and beams ({', '.join(_KINDS)}), found {found}. Re-mesh with "
-                "first-order elements (Gmsh: -order 1) and without volume cells"
+                f"shells and beams and nine-node quadrilaterals ({', '.join(_KINDS)}), "
+                f"found {found}. Re-mesh with first-order elements (Gmsh: -order 1) or "
+                "complete second-order quads (Gmsh: -order 2 with "
+                "Mesh.SecondOrderIncomplete = 0, recombined), without volume cells"
             )
         data = np.asarray(block.data, dtype=np.int64)
+        if split:  # meshio line3: end, end, middle
+            data = np.stack([data[:, [0, 2]], data[:, [2, 1]]], axis=1).reshape(-1, 2)
         block_kind.append(kind)
+        block_split.append(split)
         block_offset.append(counts.get(kind, 0))
         cells.setdefault(kind, []).append(data)
         counts[kind] = counts.get(kind, 0) + len(data)
     cells_c = {k: np.concatenate(v) for k, v in cells.items()}
-    if not any(k in cells_c for k in ("tri3", "quad4", "line2")):
+    if not any(k in cells_c for k in ("tri3", "quad4", "quad9", "line2")):
         raise FormatError(f"{where}: no triangle, quad or line cells")
 
     element_sets: dict[str, dict[str, list[np.ndarray]]] = {}
@@ -157,8 +170,11 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
         if len(local) == 0:
             return
         kind = block_kind[b]
+        local = np.asarray(local, dtype=np.int64)
+        if block_split[b]:
+            local = np.stack([2 * local, 2 * local + 1], axis=1).ravel()
         element_sets.setdefault(name, {}).setdefault(kind, []).append(
-            block_offset[b] + np.asarray(local, dtype=np.int64))
+            block_offset[b] + local)
 
     for name, per_block in (m.cell_sets or {}).items():
         if name.startswith("gmsh:"):
@@ -168,7 +184,7 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
                 add(str(name), b, local)
     phys = (m.cell_data or {}).get("gmsh:physical")
     if phys is not None and m.field_data:
-        dims = {"vertex": 0, "line2": 1, "tri3": 2, "quad4": 2}
+        dims = {"vertex": 0, "line2": 1, "tri3": 2, "quad4": 2, "quad9": 2}
         for name, (tag, dim) in ((k, v[:2]) for k, v in m.field_data.items()):
             for b, tags in enumerate(phys):
                 if dims[block_kind[b]] == int(dim):
@@ -224,6 +240,7 @@ def mesh_model(
     node_sets: Mapping[str, Sequence[int]] | None = None,
     name: str = "",
     meta: Mapping[str, Any] | None = None,
+    node_frames: Mapping[int, Any] | None = None,
 ) -> FEModel:
     """Assemble an imported mesh, one section per element set.
 
@@ -236,7 +253,7 @@ def mesh_model(
         set; line cells outside mapped sets are ignored (they usually only mark edges).
     members : sequence, optional
         Further members (PointMass, Spring, RigidLink) for :func:`mvtk.fe.assemble_model`.
-    supports, node_sets, name, meta
+    supports, node_sets, name, meta, node_frames
         As in :func:`mvtk.fe.assemble_model`; ``node_sets`` add to the mesh's.
 
     Raises
@@ -257,7 +274,7 @@ def mesh_model(
         if isinstance(sec, Laminate):
             sec = ShellSection(sec)
         if isinstance(sec, ShellSection):
-            kinds = [k for k in ("tri3", "quad4") if k in parts]
+            kinds = [k for k in ("tri3", "quad4", "quad9") if k in parts]
             if not kinds:
                 raise ParameterError(f"element set {set_name!r} has no triangles or quads "
                                      f"(it holds {sorted(parts)}) but got a shell section")
@@ -276,11 +293,11 @@ def mesh_model(
             raise ParameterError(f"section of element set {set_name!r} must be a "
                                  f"ShellSection, BeamProperty or Laminate, got "
                                  f"{type(sec).__name__}")
-    for k in ("tri3", "quad4", "line2"):
+    for k in ("tri3", "quad4", "quad9", "line2"):
         if k in covered and np.any(covered[k] > 1):
             raise ParameterError(f"{int(np.sum(covered[k] > 1))} {k} cells belong to several "
                                  "mapped element sets; map each cell once")
-        if k in ("tri3", "quad4") and k in covered and np.any(covered[k] == 0):
+        if k in ("tri3", "quad4", "quad9") and k in covered and np.any(covered[k] == 0):
             raise ParameterError(
                 f"{int(np.sum(covered[k] == 0))} of {len(covered[k])} {k} cells of "
                 f"{mesh.source or 'the mesh'} have no section; map their element sets "
@@ -291,7 +308,7 @@ def mesh_model(
     info = {"mesh_source": mesh.source}
     info.update(meta or {})
     return assemble_model(mesh.nodes, out + list(members), supports=supports, node_sets=sets,
-                          name=name, meta=info)
+                          name=name, meta=info, node_frames=node_frames)
 
 
 def _shapes_full(model: FEModel, result) -> np.ndarray:
@@ -304,7 +321,7 @@ def _shapes_full(model: FEModel, result) -> np.ndarray:
 
 
 def _cells(model: FEModel) -> list[tuple[str, np.ndarray]]:
-    names = {"mitc4": "quad", "mitc3": "triangle", "beam2": "line"}
+    names = {"mitc4": "quad", "mitc3": "triangle", "mitc9": "quad9", "beam2": "line"}
     return [(names[k], v) for k, v in model.elements.items() if k in names and len(v)]
 
 
@@ -346,7 +363,8 @@ def write_vtu(model: FEModel, path: str | Path, result=None,
     Path
     """
     path = Path(path)
-    _export_mesh(model, result, fields).write(path, file_format="vtu")
+    with atomic_path(path) as tmp:
+        _export_mesh(model, result, fields).write(tmp, file_format="vtu")
     return path
 
 
@@ -375,7 +393,7 @@ def write_xdmf(model: FEModel, path: str | Path, result=None,
     if result is not None:
         fn = np.asarray(result.fn_hz, dtype=float)
         rows = "".join(f"{k},{float(f)!r}\n" for k, f in enumerate(fn, start=1))
-        path.with_suffix(".fn_hz.csv").write_text("mode,fn_hz\n" + rows)
+        write_text(path.with_suffix(".fn_hz.csv"), "mode,fn_hz\n" + rows)
     return path
 
 
@@ -389,9 +407,12 @@ def write_uff(model: FEModel, path: str | Path, result=None) -> Path:
     import pyuff
 
     path = Path(path)
-    if path.exists():
-        path.unlink()
-    uff = pyuff.UFF(str(path))
+    with atomic_path(path) as tmp:
+        _write_uff_sets(pyuff, pyuff.UFF(str(tmp)), model, result)
+    return path
+
+
+def _write_uff_sets(pyuff, uff, model: FEModel, result) -> None:
     ids = np.asarray(model.node_ids, dtype=int)
     zeros = np.zeros(model.n_nodes, dtype=int)
     uff.write_sets(pyuff.prepare_2411(node_nums=ids, def_cs=zeros, disp_cs=zeros,
@@ -412,4 +433,3 @@ def write_uff(model: FEModel, path: str | Path, result=None) -> Path:
                 freq=float(result.fn_hz[k - 1]), modal_damp_vis=0.0, modal_damp_his=0.0,
                 return_full_dict=True)
             uff.write_sets(ds, mode="add")
-    return path

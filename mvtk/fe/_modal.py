@@ -181,6 +181,33 @@ def _part_matrices(xy: np.ndarray, parts, n_nodes: int, lam, drill_df: float) ->
     return Ku.reshape(4, n_u, *Ku.shape[1:])
 
 
+def _mitc9_parts(model, conn, lam, axis, parts, drill_df, u) -> np.ndarray:
+    """Bending, torsion, shear and in-plane energies (k, 4) of MITC9 elements."""
+    from ._general import _directors
+    from ._mitc9 import mitc9_matrices
+
+    directors = _directors(model.nodes, [model.elements["mitc9"]])
+    k = u.shape[1]
+    out = np.zeros((k, 4))
+    for start in range(0, len(conn), _CHUNK):
+        c = conn[start:start + _CHUNK]
+        ax = np.asarray(axis, dtype=float)
+        if ax.ndim == 2:
+            ax = ax[start:start + _CHUNK]
+        ue = u[(c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)]  # (n_el, 54, k)
+        e = np.zeros((4, len(c), k))
+        for part, (abd, h) in enumerate(parts):
+            Kp, _ = mitc9_matrices(model.nodes[c], directors[c], abd, h, (0.0, 0.0, 0.0),
+                                   lam.thickness, ax, drill_df if part == 3 else 0.0)
+            e[part] = np.einsum("eik,eij,ejk->ek", ue, Kp, ue, optimize=True)
+        normal, twist, shear, membrane = e
+        to_twist = twist > normal  # transverse shear joins the dominant curvature kind
+        out[:, 0] += (normal + np.where(to_twist, 0.0, shear)).sum(axis=0)
+        out[:, 1] += (twist + np.where(to_twist, shear, 0.0)).sum(axis=0)
+        out[:, 2] += membrane.sum(axis=0)
+    return out
+
+
 def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
     """Strain energy of mode shapes split into bending, torsion, in-plane and axial parts.
 
@@ -239,6 +266,9 @@ def energy_split(model: FEModel, shapes: np.ndarray) -> np.ndarray:
         parts = [(d_n, zero2), (d_t, zero2), (np.zeros((6, 6)), lam.H), (a_only, zero2)]
         drill_df = 1e-3 if drill is None else drill
         factors: dict = {}
+        if kind == "mitc9":  # curved nine-node shells: part matrices per element
+            out += _mitc9_parts(model, conn, lam, axis, parts, drill_df, u)
+            continue
         for start in range(0, len(conn), _CHUNK):
             c = conn[start:start + _CHUNK]
             dofs = (c[:, :, None] * 6 + np.arange(6)).reshape(len(c), -1)
@@ -543,10 +573,17 @@ def modal_analysis(
                      (2 * np.pi * 1e-3) ** 2)
         rigid = np.abs(w2) < thresh
         low = np.abs(w2[~rigid])
+        bound = _trial_scale_bound(model) if low.size else np.inf
+        if np.isfinite(bound) and bound > 0:
+            # zero-energy modes by a scale that does not depend on how many modes were
+            # asked for (the largest computed eigenvalue does): the pieces of a cracked
+            # mesh move rigidly whether -n is 6 or 8
+            rigid |= np.abs(w2) < 1e-7 * bound
+            low = np.abs(w2[~rigid])
         # the candidates below need |omega2| < 1e-5 q; the minimum over four of the
         # trial fields bounds q from above, and when no mode is below 1e-5 of that
         # bound, none is a candidate and q is not needed (clamped structures)
-        if low.size and (memo or low.min() < 1e-5 * _trial_scale_bound(model)):
+        if low.size and (memo or low.min() < 1e-5 * bound):
             trial_q = trial()
         else:
             trial_q = np.inf
@@ -574,6 +611,9 @@ def modal_analysis(
             labels.append(by_energy[i])
         else:
             labels.append(mode_type(model, vecs[:, i]))
+    from ._sanity import warn_under_resolved
+
+    warn_under_resolved(model, vecs, fn, rigid)
     return ModalResult(fn_hz=fn, omega2=w2, shapes=vecs, rigid=rigid, mode_type=tuple(labels),
                        dof_node_id=np.asarray(model.node_ids)[model.dof_node],
                        dof_component=np.asarray(model.dof_component))

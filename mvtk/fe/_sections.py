@@ -7,8 +7,9 @@ Local section axes follow :mod:`mvtk.fe._beam`: the beam axis is x, the section'
 Formulas (homogeneous, linear elastic, shear centre = centroid, warping neglected):
 
 - rectangle ``b x h``: ``A = b h``, ``Iy = b h^3/12``, ``Iz = h b^3/12``, ``J`` the
-  Saint-Venant series of a rectangle (Timoshenko & Goodier 1970, section 109), shear
-  factor 5/6;
+  Saint-Venant series of a rectangle (Timoshenko & Goodier 1970, section 109), Cowper's
+  (1966) shear factor ``k = 10 (1 + nu) / (12 + 11 nu)`` by default (0.850 for
+  nu = 0.3; 5/6 is its nu = 0 value);
 - tube (outer radius ``r_o``, inner ``r_i``): ``A = pi (r_o^2 - r_i^2)``,
   ``I = pi (r_o^4 - r_i^4)/4``, ``J = 2 I``, Cowper's (1966) shear factor
   ``k = 6 (1 + nu)(1 + m^2)^2 / ((7 + 6 nu)(1 + m^2)^2 + (20 + 12 nu) m^2)``,
@@ -61,10 +62,18 @@ def _section(E, G, rho, A, Iy, Iz, J, Asz, Asy, width, height) -> BeamSection:
 
 
 def rectangle_section(material: OrthotropicMaterial, width: float, height: float,
-                      shear_correction: float = 5.0 / 6.0) -> BeamSection:
-    """Solid rectangle, ``width`` along local y and ``height`` along local z (m)."""
+                      shear_correction: float | None = None) -> BeamSection:
+    """Solid rectangle, ``width`` along local y and ``height`` along local z (m).
+
+    ``shear_correction`` defaults to Cowper's ``10 (1 + nu) / (12 + 11 nu)`` (Cowper,
+    J. Appl. Mech. 33 (1966) 335-340, table 1), ``nu = E / (2 G) - 1``.
+    """
     _positive("rectangle_section", width=width, height=height)
     E, G, rho = _moduli(material, "rectangle_section")
+    if shear_correction is None:
+        nu = E / (2 * G) - 1
+        shear_correction = 10 * (1 + nu) / (12 + 11 * nu)
+    _positive("rectangle_section", shear_correction=shear_correction)
     b, h = float(width), float(height)
     J = _rect_torsion_factor(max(b, h), min(b, h))
     A = b * h

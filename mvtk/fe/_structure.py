@@ -86,8 +86,15 @@ ends; points by ``x`` (``y``, if given, within the width).
 Both plates and beams take ``boundary.supports = { <node set> = "<type>" | [DOFs] }`` with
 the types of :data:`mvtk.fe.GENERAL_SUPPORTS` (docs/fe.md). A ``type = "mesh"``
 structure imports a mesh file (``[mesh] file``, ``sections``), with ``[sections.*]``,
-``[[masses]]``, ``[[rigid_links]]`` and ``[[points]]`` with x, y, z; its schema is in
-data/structures/README.md. Every unknown or inapplicable key raises
+``[[masses]]``, ``[[rigid_links]]``, ``[[points]]`` with x, y, z,
+``[coordinate_systems.*]``, ``boundary.frames`` and ``[[loads]]``
+(:mod:`mvtk.fe._structure_loads`); its schema is in data/structures/README.md; its
+``[[patches]]`` take ``name``, ``element_set`` (a set of
+the mesh) or ``region`` (``shape`` box/circle/polygon, ``origin``, ``axis``, ``u``, ``v``,
+``radius``, ``points``: see :func:`mvtk.fe.select_region`), ``layers`` (from the base
+outwards), ``side`` (top/bottom) and ``electrodes`` (``name``, ``plies``, ``signs``); the
+piezo plies become electrodes of ``meta['piezo_patches']`` (:func:`mvtk.fe.piezo_coupling`,
+docs/guide/fe.md). Every unknown or inapplicable key raises
 :class:`~mvtk.errors.ConfigError` naming the key and the accepted ones.
 
 Node sets of the (plate) model: the edges ``x0 x1 y0 y1``, ``patch:<name>`` and its edges
@@ -114,10 +121,17 @@ import scipy.sparse as sp
 from ..errors import ConfigError, MvtkError
 from ._general import GENERAL_SUPPORTS, support_dofs
 from ._laminate import Laminate
-from ._materials import IsotropicMaterial, OrthotropicMaterial, PiezoMaterial, Ply
+from ._materials import (
+    IsotropicMaterial,
+    OrthotropicMaterial,
+    OrthotropicPiezoMaterial,
+    PiezoMaterial,
+    Ply,
+)
 from ._mesh import Patch
 from ._model import DOF_NAMES, FEModel
 from ._plate import SpringSupport, plate_model
+from ._structure_loads import coordinate_systems, load_cases, node_frames
 
 __all__ = ["build_model", "load_structure", "set_by_path", "get_by_path", "constrain_model"]
 
@@ -144,6 +158,11 @@ def load_structure(path: str | Path) -> dict:
         If the file is missing or not valid TOML (message names the file).
     """
     path = Path(path)
+    from .._atomic import special_file
+
+    kind = special_file(path)
+    if kind is not None:
+        raise ConfigError(f"structure file {str(path)!r} is {kind}, expected a TOML file")
     try:
         with path.open("rb") as fh:
             return resolve_mesh_file(tomllib.load(fh), path.parent)
@@ -250,25 +269,37 @@ def _material(name: str, d: Any):
     if not isinstance(d, Mapping):
         raise ConfigError(f"materials.{name}: expected a table, got {type(d).__name__}")
     try:
+        piezo_keys = ("d31", "d32", "eps33")
+        if "d32" in d and "d31" not in d:
+            raise ConfigError(f"{where}d31: a piezo material needs d31 (m/V) with d32")
+        if "eps33" in d and "d31" not in d:
+            raise ConfigError(f"{where}d31: a piezo material needs d31 (m/V) with eps33")
+        piezo = {k: _number(d, k, where, positive=(k == "eps33"))
+                 for k in piezo_keys if k in d}
         if "E1" in d:
-            unknown = set(d) - set(_ORTHO_KEYS)
+            unknown = set(d) - set(_ORTHO_KEYS) - set(piezo_keys)
             if unknown:
                 raise ConfigError(f"{where}: unknown keys {sorted(unknown)}; "
-                                  f"orthotropic materials take {list(_ORTHO_KEYS)}")
+                                  f"orthotropic materials take {list(_ORTHO_KEYS)} "
+                                  "(and d31, d32, eps33 for piezo)")
             vals = {k: _number(d, k, where, positive=(k != "nu12")) for k in _ORTHO_KEYS}
+            if piezo:
+                return OrthotropicPiezoMaterial(name=name, **vals, **piezo)
             return OrthotropicMaterial(name=name, **vals)
-        allowed = {"E", "nu", "rho", "d31"}
+        allowed = {"E", "nu", "rho", "d31", "d32", "eps33"}
         unknown = set(d) - allowed
         if unknown:
             raise ConfigError(
                 f"{where}: unknown keys {sorted(unknown)}; isotropic materials take E, nu, rho "
-                "(and d31 for piezo), orthotropic ones E1, E2, G12, G13, G23, nu12, rho"
+                "(and d31, d32, eps33 for piezo), orthotropic ones E1, E2, G12, G13, G23, "
+                "nu12, rho"
             )
         E = _number(d, "E", where)
         nu = _number(d, "nu", where, positive=False)
         rho = _number(d, "rho", where)
-        if "d31" in d:
-            return PiezoMaterial(name, E, nu, rho, _number(d, "d31", where, positive=False))
+        if piezo:
+            return PiezoMaterial(name, E, nu, rho, piezo["d31"], piezo.get("d32"),
+                                 piezo.get("eps33"))
         return IsotropicMaterial(name, E, nu, rho)
     except ConfigError:
         raise
@@ -300,6 +331,20 @@ def _plies(layers: Any, materials: Mapping, where: str) -> list[Ply]:
 
 
 def build_model(structure: Mapping | str | Path) -> FEModel:
+    """Build an :class:`FEModel` from a structure description, checked before any solve.
+
+    The model passes :func:`mvtk.fe._sanity.check_model`: duplicate names, duplicated
+    elements, points off the mesh and complex or indefinite matrices are errors; a
+    geometry or material in a suspicious unit, a mesh too coarse for a bending
+    half-wave and coincident unconnected nodes are :class:`~mvtk.errors.ModelWarning`
+    s, also listed in ``model.meta["sanity"]``.
+    """
+    from ._sanity import check_model
+
+    return check_model(_build_model(structure))
+
+
+def _build_model(structure: Mapping | str | Path) -> FEModel:
     """Build an :class:`FEModel` from a structure description.
 
     Parameters
@@ -325,7 +370,7 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         raise ConfigError(f"structure must be a dict or a TOML path, got {type(structure)}")
     s = copy.deepcopy(dict(structure))
     known = {"name", "materials", "structure", "patches", "mesh", "boundary", "points",
-             "sections", "masses", "rigid_links"}
+             "sections", "masses", "rigid_links", "coordinate_systems", "loads"}
     unknown = set(s) - known
     if unknown:
         raise ConfigError(f"unknown top-level keys {sorted(unknown)}; expected {sorted(known)}")
@@ -340,7 +385,9 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
     if kind == "mesh":
         return _build_mesh(s, st, materials, source)
     for key, why in (("sections", "for imported meshes"), ("masses", "for imported meshes"),
-                     ("rigid_links", "for imported meshes")):
+                     ("rigid_links", "for imported meshes"),
+                     ("coordinate_systems", "for imported meshes and Nastran decks"),
+                     ("loads", "for imported meshes and Nastran decks")):
         if key in s:
             raise ConfigError(f"{key}: not applicable to structure.type = {kind!r} ({why}, "
                               "structure.type = 'mesh')")
@@ -358,7 +405,8 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
         name = p.get("name")
         if not isinstance(name, str) or not name:
             raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
-        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers"))
+        _check_keys(p, f"patches[{i}]", ("name", "x0", "x1", "y0", "y1", "layers",
+                                          "electrodes"))
         coords = [_number(p, k, w, positive=False) for k in ("x0", "x1", "y0", "y1")]
         patches.append((Patch(name, *coords), _plies(p.get("layers"), materials, w + "layers")))
 
@@ -414,7 +462,8 @@ def build_model(structure: Mapping | str | Path) -> FEModel:
             clamp_translational_stiffness=cts, springs=springs, points=points,
             shear_correction=ks, name=str(s.get("name", "")), meta=meta,
         )
-        return constrain_model(model, general, ())
+        model = _plate_piezo(model, s.get("patches", []), patches, len(layers))
+        return _with_series(constrain_model(model, general, ()))
     except ConfigError:
         raise
     except MvtkError as err:
@@ -590,8 +639,8 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
             raise ConfigError(f"sections.{name}: expected layers (shell) or shape (beam: "
                               f"{', '.join(_SHAPES)}), got shape={shape!r}")
         dims = _SHAPES[shape]
-        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset")
-                    + dims)
+        _check_keys(d, f"sections.{name}", ("shape", "material", "orientation", "offset",
+                                             "shear_factor") + dims)
         mat = d.get("material")
         if mat not in materials:
             raise ConfigError(f"{w}material: {mat!r} is not defined; defined materials: "
@@ -604,6 +653,10 @@ def _mesh_sections(s: Mapping, materials: Mapping, ks: float) -> dict:
                        "generic": secs.generic_section}[shape](materials[mat], **vals)
         except MvtkError as err:
             raise ConfigError(f"sections.{name}: {err}") from err
+        if "shear_factor" in d:  # k of k G A, both bending planes
+            sf = _number(d, "shear_factor", w)
+            GA = materials[mat].G12 * section.EA / materials[mat].E1
+            section = replace(section, kGAz=sf * GA, kGAy=sf * GA)
         out[name] = BeamProperty(section, _vec(d, "orientation", w, [0.0, 0.0, 1.0]),
                                  _vec(d, "offset", w, [0.0, 0.0, 0.0]))
     return out
@@ -618,9 +671,6 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
                 {k: "the geometry comes from mesh.file" for k in ("length", "width",
                                                                    "layers")})
     ks = _number(st, "shear_correction", "structure.", required=False, default=5.0 / 6.0)
-    if "patches" in s:
-        raise ConfigError("patches: not applicable to an imported mesh; map the patch's "
-                          "element set to its own section in mesh.sections")
     mesh_d = s.get("mesh")
     if not isinstance(mesh_d, Mapping) or "file" not in mesh_d:
         raise ConfigError("mesh.file: an imported structure needs [mesh] file = 'part.msh'")
@@ -644,6 +694,14 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         mesh = read_mesh(path)
     except MvtkError as err:
         raise ConfigError(f"mesh.file: {err}") from err
+    from ._sanity import check_size
+
+    check_size(len(mesh.nodes), sum(len(c) for c in mesh.cells.values()),
+               f"mesh.file {path.name}")
+    piezo_patches: list = []
+    if "patches" in s:
+        mesh, mapping, sections, piezo_patches = _mesh_patches(s, mesh, dict(mapping),
+                                                               sections, materials)
     node_sets = dict(mesh.node_sets)
     for i, p in enumerate(s.get("points", [])):
         if not isinstance(p, Mapping) or not isinstance(p.get("name"), str):
@@ -666,11 +724,30 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
         w = f"masses[{i}]"
         if not isinstance(m, Mapping):
             raise ConfigError(f"{w}: expected a table")
-        _check_keys(m, w, ("point", "mass", "inertia", "offset"))
-        members.append(PointMass(one_node(m.get("point"), w + ".point"),
-                                 _number(m, "mass", w + ".", positive=False),
-                                 _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0]),
-                                 _vec(m, "offset", w + ".", [0.0, 0.0, 0.0])))
+        _check_keys(m, w, ("point", "mass", "inertia", "offset", "system"))
+        node_ = one_node(m.get("point"), w + ".point")
+        inertia = m.get("inertia", [0.0, 0.0, 0.0])
+        if isinstance(inertia, list) and len(inertia) == 3 and all(
+                isinstance(r, list) for r in inertia):
+            J = np.array(inertia, dtype=float)  # a full tensor [[Ixx, Ixy, Ixz], ...]
+            if J.shape != (3, 3):
+                raise ConfigError(f"{w}.inertia: expected 3 numbers or a 3 x 3 tensor")
+        else:
+            J = _vec(m, "inertia", w + ".", [0.0, 0.0, 0.0])
+        frame = None
+        if "system" in m:
+            systems_ = coordinate_systems(s)
+            if m["system"] not in systems_:
+                raise ConfigError(f"{w}.system: {m['system']!r} is not defined; defined: "
+                                  f"{sorted(systems_)}")
+            frame = systems_[m["system"]].axes_at(mesh.nodes[node_])
+        try:
+            members.append(PointMass(node_, _number(m, "mass", w + ".", positive=False),
+                                     J, _vec(m, "offset", w + ".", [0.0, 0.0, 0.0]),
+                                     frame))
+            members[-1].matrix()
+        except MvtkError as err:
+            raise ConfigError(f"{w}: {err}") from err
     for i, r in enumerate(s.get("rigid_links", [])):
         w = f"rigid_links[{i}]"
         if not isinstance(r, Mapping):
@@ -686,10 +763,12 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"),
+    _check_keys(b, "boundary", ("supports", "springs", "frames"),
                 {k: "for the built-in plate/beam; use boundary.supports on a node set"
                  for k in ("clamp", "clamp_stiffness", "clamp_translational_stiffness",
                            "edges")})
+    systems = coordinate_systems(s)
+    frames = node_frames(b, systems, mesh.nodes, node_sets)
     for sp_ in _springs(b, allow_per_length=False):
         set_name, dof, kval, _ = sp_
         if set_name not in node_sets:
@@ -697,15 +776,28 @@ def _build_mesh(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
                               f"available: {sorted(node_sets)}")
         members += [Spring(int(n), {dof: kval}) for n in node_sets[set_name]]
     meta = {"structure": s}
+    if piezo_patches:
+        meta["piezo_patches"] = tuple(piezo_patches)
     if source is not None:
         meta["source"] = source
     try:
-        return mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
-                          members=members, supports=_supports(b), node_sets=node_sets,
-                          name=str(s.get("name", "")), meta=meta)
+        model = _with_series(mesh_model(mesh, {k: sections[v] for k, v in mapping.items()},
+                                        members=members, supports=_supports(b),
+                                        node_sets=node_sets, name=str(s.get("name", "")),
+                                        meta=meta, node_frames=frames or None))
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
+    return _with_loads(s, model, systems)
+
+
+def _with_loads(s: Mapping, model: FEModel, systems) -> FEModel:
+    """The model with ``meta["load_cases"]`` from ``[[loads]]`` (when given)."""
+    if "loads" not in s:
+        return model
+    cases = dict(model.meta.get("load_cases") or {})  # a deck's own load sets stay
+    cases.update(load_cases(s, model, systems))
+    return replace(model, meta=dict(model.meta, load_cases=cases))
 
 
 def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> FEModel:
@@ -724,7 +816,9 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
-    _check_keys(b, "boundary", ("supports", "springs"))
+    _check_keys(b, "boundary", ("supports", "springs"),
+                {"frames": "a Nastran deck gives node frames by GRID CD"})
+    systems = coordinate_systems(s)
     try:
         model = read_nastran(path, spc_id=spc, name=str(s.get("name", "")))
     except MvtkError as err:
@@ -740,7 +834,8 @@ def _build_nastran(s: dict, mesh_d: Mapping, path: Path, source: str | None) -> 
     if source is not None:
         meta["source"] = source
     model = replace(model, node_sets=sets, meta=meta)
-    return constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    model = constrain_model(model, _supports(b), _springs(b, allow_per_length=False))
+    return _with_loads(s, model, systems)
 
 
 def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) -> FEModel:
@@ -782,6 +877,9 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     if isinstance(n_el, bool) or not isinstance(n_el, int) or n_el < 1:
         raise ConfigError(f"mesh.{given[0] if given else 'n_elements'}: expected a positive "
                           f"integer, got {n_el!r}")
+    from ._sanity import check_size
+
+    check_size(n_el + 1, n_el, f"mesh.{given[0] if given else 'n_elements'}", beam=True)
     b = s.get("boundary", {})
     if not isinstance(b, Mapping):
         raise ConfigError("boundary: expected a table")
@@ -821,3 +919,227 @@ def _build_beam(s: dict, st: Mapping, materials: Mapping, source: str | None) ->
     except MvtkError as err:
         raise ConfigError(f"structure description{' ' + source if source else ''}: {err}") \
             from err
+
+
+_MESH_PATCH_KEYS = ("name", "element_set", "region", "layers", "side", "electrodes")
+_REGION_KEYS = ("shape", "origin", "axis", "normal", "u", "v", "radius", "points")
+
+
+def _electrodes(p: Mapping, where: str, name: str, patch_plies, stack_index):
+    """``patches[i].electrodes``: Electrode objects (ply indices into the whole stack)."""
+    from ._electro import Electrode
+    from ._materials import is_piezo
+
+    raw = p.get("electrodes")
+    if raw is None:
+        return None
+    if not isinstance(raw, list) or not raw:
+        raise ConfigError(f"{where}electrodes: expected a list of tables "
+                          "[{ name = 'a', plies = [1], signs = [1] }]")
+    out = []
+    for j, e in enumerate(raw):
+        w = f"{where}electrodes[{j}]"
+        if not isinstance(e, Mapping):
+            raise ConfigError(f"{w}: expected a table with name and plies")
+        _check_keys(e, w, ("name", "plies", "signs", "wiring"))
+        if e.get("wiring", "parallel") not in ("parallel", "series"):
+            raise ConfigError(f"{w}.wiring: expected 'parallel' or 'series', got "
+                              f"{e.get('wiring')!r}")
+        plies = e.get("plies")
+        if not isinstance(plies, list) or not plies:
+            raise ConfigError(f"{w}.plies: the electrode is wired to no ply; expected a "
+                              "non-empty list of indices into the patch's layers")
+        for k in plies:
+            if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k < len(patch_plies):
+                raise ConfigError(f"{w}.plies: {k!r} is not a layer index of the patch "
+                                  f"(0..{len(patch_plies) - 1}, from the base outwards)")
+            if not is_piezo(patch_plies[k].material):
+                raise ConfigError(f"{w}.plies: layer {k} of material "
+                                  f"{patch_plies[k].material.name!r} has no d31")
+        signs = e.get("signs")
+        if signs is not None and (not isinstance(signs, list) or len(signs) != len(plies)
+                                  or any(x not in (1, -1) for x in signs)):
+            raise ConfigError(f"{w}.signs: expected {len(plies)} values of +1 or -1, "
+                              f"got {signs!r}")
+        ename = e.get("name", name if len(raw) == 1 else f"{name}:{j}")
+        if not isinstance(ename, str) or not ename:
+            raise ConfigError(f"{w}.name: expected a non-empty string, got {ename!r}")
+        try:
+            out.append(Electrode(ename, tuple(stack_index[k] for k in plies),
+                                 None if signs is None else tuple(signs),
+                                 e.get("wiring", "parallel")))
+        except MvtkError as err:
+            raise ConfigError(f"{w}: {err}") from err
+    return tuple(out)
+
+
+def _mesh_patches(s: Mapping, mesh, mapping: dict, sections: dict, materials: Mapping):
+    """``[[patches]]`` on an imported mesh: each patch's cells (an element set or a
+    region) get the base section plus the patch layers; piezo plies become electrodes.
+
+    Returns the mesh with the patch cells moved to element sets ``patch:<name>``, the
+    updated set-to-section mapping and sections, and the ShellPiezoPatch list.
+    """
+    from dataclasses import replace as _replace
+
+    from ._electro import Electrode, ShellPiezoPatch, select_region, stacked_laminate
+    from ._materials import is_piezo
+    from ._meshio import ShellSection
+
+    raw = s.get("patches")
+    if not isinstance(raw, list):
+        raise ConfigError("patches: expected a list of tables ([[patches]])")
+    esets = {k: dict(v) for k, v in mesh.element_sets.items()}
+    owner: dict[tuple[str, int], str] = {}
+    out: list = []
+    for set_name in mapping:
+        for kind, idx in esets.get(set_name, {}).items():
+            for c in idx:
+                owner[(kind, int(c))] = set_name
+    node_sets = dict(mesh.node_sets)
+    groups: dict[tuple, dict] = {}   # cells -> {"top": i, "bottom": i}
+    cell_group: dict[tuple[str, int], tuple] = {}
+    items = []
+    for i, p in enumerate(raw):
+        w = f"patches[{i}]."
+        if not isinstance(p, Mapping):
+            raise ConfigError(f"patches[{i}]: expected a table")
+        _check_keys(p, f"patches[{i}]", _MESH_PATCH_KEYS,
+                    {k: "x0/x1/y0/y1 are for the generated plate; on a mesh give "
+                     "element_set or region" for k in ("x0", "x1", "y0", "y1")})
+        name = p.get("name")
+        if not isinstance(name, str) or not name:
+            raise ConfigError(f"{w}name: expected a non-empty string, got {name!r}")
+        if any(name == it[1] for it in items):
+            raise ConfigError(f"{w}name: {name!r} used twice")
+        if ("element_set" in p) == ("region" in p):
+            raise ConfigError(f"patches[{i}]: give one of element_set or region")
+        if "element_set" in p:
+            es = p["element_set"]
+            if es not in mesh.element_sets:
+                raise ConfigError(f"{w}element_set: {es!r} is not an element set of the "
+                                  f"mesh; available: {sorted(mesh.element_sets)}")
+            sel = {k: v for k, v in mesh.element_sets[es].items() if k in ("tri3", "quad4")}
+            if not sel:
+                raise ConfigError(f"{w}element_set: {es!r} has no shell cells")
+        else:
+            reg = p["region"]
+            if not isinstance(reg, Mapping):
+                raise ConfigError(f"{w}region: expected a table such as {{ shape = 'circle', "
+                                  "origin = [x, y, z], radius = 0.02 }")
+            _check_keys(reg, f"patches[{i}].region", _REGION_KEYS)
+            try:
+                sel = select_region(mesh.nodes, {k: v for k, v in mesh.cells.items()
+                                                 if k in ("tri3", "quad4")},
+                                    where=f"patches[{i}].region", **dict(reg))
+            except MvtkError as err:
+                raise ConfigError(str(err)) from err
+            except (TypeError, ValueError) as err:
+                raise ConfigError(f"{w}region: {err}") from err
+        cells = tuple(sorted((k, int(c)) for k, idx in sel.items() for c in idx))
+        bases = {owner.get(c) for c in cells}
+        if None in bases or len(bases) != 1:
+            raise ConfigError(f"{w[:-1]}: its elements must lie on one mapped shell set, "
+                              f"found {sorted(map(str, bases))}")
+        base_set = bases.pop()
+        if not isinstance(sections[mapping[base_set]], ShellSection):
+            raise ConfigError(f"{w[:-1]}: element set {base_set!r} is not a shell")
+        side = p.get("side", "top")
+        if side not in ("top", "bottom"):
+            raise ConfigError(f"{w}side: expected 'top' or 'bottom', got {side!r}")
+        for c in cells:
+            other = cell_group.get(c)
+            if other is not None and other != cells:
+                raise ConfigError(f"{w[:-1]}: partly overlaps patch "
+                                  f"{raw[next(iter(groups[other].values()))]['name']!r}; "
+                                  "patches share all of their elements or none")
+            cell_group[c] = cells
+        g = groups.setdefault(cells, {})
+        if side in g:
+            raise ConfigError(f"{w[:-1]}: patch {raw[g[side]]['name']!r} already covers "
+                              f"the {side} side of these elements")
+        g[side] = i
+        plies = _plies(p.get("layers"), materials, w + "layers")
+        items.append((i, name, sel, base_set, side, plies))
+    for g in groups.values():
+        first = items[min(g.values())]
+        sel, base_set = first[2], first[3]
+        base_sec = sections[mapping[base_set]]
+        top = items[g["top"]][5] if "top" in g else ()
+        bottom = items[g["bottom"]][5] if "bottom" in g else ()
+        lam, i_top, i_bot = stacked_laminate(base_sec.laminate, base_sec.offset, top, bottom)
+        pname = "patch:" + "+".join(items[j][1] for j in sorted(g.values()))
+        for k, idx in sel.items():
+            esets[base_set][k] = np.setdiff1d(esets[base_set][k], idx)
+            if not len(esets[base_set][k]):
+                del esets[base_set][k]
+        if not any(k in esets[base_set] for k in ("tri3", "quad4", "line2")):
+            del mapping[base_set]
+        esets[pname] = {k: np.asarray(v) for k, v in sel.items()}
+        sections[pname] = ShellSection(lam, base_sec.material_axis, 0.0)
+        mapping[pname] = pname
+        nodes_ = np.unique(np.concatenate([mesh.cells[k][v].ravel() for k, v in sel.items()]))
+        for side, j in g.items():
+            i, name, _, _, _, plies = items[j]
+            node_sets[f"patch:{name}"] = nodes_
+            index = i_top if side == "top" else i_bot
+            w = f"patches[{i}]."
+            electrodes = _electrodes(raw[i], w, name, plies, index)
+            piezo = [index[k] for k, q in enumerate(plies) if is_piezo(q.material)]
+            if electrodes is None and piezo:
+                electrodes = tuple(Electrode(name if len(piezo) == 1 else f"{name}:{k}",
+                                             (s_,)) for k, s_ in enumerate(piezo))
+            if electrodes is None:
+                continue
+            try:
+                out.append(ShellPiezoPatch(name, tuple(mesh.cells[k][v] for k, v in
+                                                       sorted(sel.items())),
+                                           lam, base_sec.material_axis, electrodes))
+            except MvtkError as err:
+                raise ConfigError(f"patches[{i}]: {err}") from err
+    out.sort(key=lambda pp: [it[1] for it in items].index(pp.name))
+    return (_replace(mesh, element_sets=esets, node_sets=node_sets), mapping, sections, out)
+
+
+def _plate_piezo(model: FEModel, raw: list, patches: list, n_base: int) -> FEModel:
+    """``meta["piezo_patches"]`` of a generated plate: the piezo plies of each patch (its
+    elements are the plate's region ``i + 1``, its section base + patch plies)."""
+    from ._electro import Electrode, ShellPiezoPatch
+    from ._materials import is_piezo
+
+    out = []
+    region = np.asarray(model.meta["element_region"])
+    for i, ((patch, plies), p) in enumerate(zip(patches, raw)):
+        index = [n_base + k for k in range(len(plies))]
+        electrodes = _electrodes(p, f"patches[{i}].", patch.name, plies, index)
+        piezo = [index[k] for k, q in enumerate(plies) if is_piezo(q.material)]
+        if electrodes is None and piezo:
+            electrodes = tuple(Electrode(patch.name if len(piezo) == 1 else
+                                         f"{patch.name}:{k}", (j,))
+                               for k, j in enumerate(piezo))
+        if electrodes is None:
+            continue
+        try:
+            out.append(ShellPiezoPatch(patch.name, model.elements["mitc4"][region == i + 1],
+                                       model.meta["laminates"][i + 1], (1.0, 0.0, 0.0),
+                                       electrodes))
+        except MvtkError as err:
+            raise ConfigError(f"patches[{i}]: {err}") from err
+    if not out:
+        return model
+    return replace(model, meta=dict(model.meta, piezo_patches=tuple(out)))
+
+
+def _with_series(model: FEModel) -> FEModel:
+    """Add the stiffening of series-wired electrodes' floating internal electrodes."""
+    from ._electro import series_stiffness
+
+    if not model.meta.get("piezo_patches"):
+        return model
+    try:
+        dK = series_stiffness(model)
+    except MvtkError as err:
+        raise ConfigError(f"patches: {err}") from err
+    if dK is None:
+        return model
+    return replace(model, K=(model.K + dK).tocsr())

@@ -34,7 +34,12 @@ Dataset layout
 ``frf``, ``cross_spectrum``, ``transmissibility`` : complex (response, reference, frequency)
     Two-point functions (UFF 58 types 4, 3, 5) when the records form a complete
     response x reference grid; otherwise (channel, frequency) with ``response`` and
-    ``reference`` coordinates on ``channel``.
+    ``reference`` coordinates on ``channel``. A UFF 58 FRF's ``attrs["units"]`` is
+    numerator over denominator (``m/s^2/N``) and ``attrs["frf_type"]`` (receptance,
+    mobility, accelerance; ``other`` over a non-force denominator) comes from the
+    records' numerator/denominator data types (8, 11, 12 over 9 or 13) or, when those
+    are general/unknown, from their unit labels. An FRF matrix written by :func:`write`
+    is read back as ``frf``.
 ``mode_shape`` : (mode, node, component)
     UFF 55 mode shapes; coordinates ``fn_hz``, ``damping_ratio``, ``eigenvalue``
     (complex, rad/s), ``mode_number`` on ``mode``; ``component`` from ``ux uy uz rx ry rz``.

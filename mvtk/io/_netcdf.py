@@ -7,6 +7,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from .._atomic import atomic_path, check_room, write_bytes
 from ..errors import FormatError, ParameterError
 from ._build import clean_attrs
 from ._validate import validate
@@ -67,9 +68,12 @@ def write(ds, path: str | os.PathLike) -> Path:
     ----------
     ds : xarray.Dataset or xarray.DataArray
         Must pass :func:`mvtk.io.validate`. A DataArray is stored as variable
-        ``"time_history"``.
+        ``"frf"`` when its dims are ``("response", "reference", "frequency")`` (an FRF
+        matrix, read back by :func:`mvtk.modal.as_frf_matrix`), else ``"time_history"``.
     path : str or path-like
-        Output file (``.nc`` recommended); overwritten if it exists.
+        Output file (``.nc`` recommended); replaced if it exists, in one step: the file
+        is written next to it and renamed, so a failed write leaves the previous file
+        unchanged.
 
     Returns
     -------
@@ -82,9 +86,14 @@ def write(ds, path: str | os.PathLike) -> Path:
         ``ds`` is not an xarray object.
     mvtk.errors.FormatError
         ``ds`` breaks the mvtk conventions (see :func:`mvtk.io.validate`).
+    mvtk.errors.OutputError
+        The file could not be written (disk full, file-size limit, permission); the
+        message names it and the cause.
     """
     if isinstance(ds, xr.DataArray):
-        ds = ds.to_dataset(name="time_history")
+        # an FRF matrix stays an FRF matrix (variable "frf"), anything else is a record
+        frf = set(ds.dims) == {"response", "reference", "frequency"}
+        ds = ds.to_dataset(name="frf" if frf else "time_history")
     if not isinstance(ds, xr.Dataset):
         raise ParameterError(
             f"write: expected an xarray.Dataset or DataArray, got {type(ds).__name__}"
@@ -94,6 +103,26 @@ def write(ds, path: str | os.PathLike) -> Path:
     out.attrs = clean_attrs(ds.attrs)
     for var in out.variables.values():
         var.attrs = clean_attrs(var.attrs)
-    path = Path(path)
-    out.to_netcdf(path, engine="h5netcdf")
+    return write_h5netcdf(out, Path(path))
+
+
+#: Datasets up to this size are encoded in memory and written with plain file I/O.
+_IN_MEMORY_BYTES = 256 * 2**20
+
+
+def write_h5netcdf(ds: xr.Dataset, path: Path) -> Path:
+    """Write ``ds`` to ``path`` as netCDF4 (h5netcdf), atomically.
+
+    HDF5 cannot recover from a write that fails half-way (a full disk, a file-size
+    limit: closing the half-written file crashes the process), so the file is encoded
+    in memory and written with plain file I/O through :func:`mvtk._atomic.atomic_path`;
+    a dataset larger than 256 MiB is written by HDF5 to the temporary file after a
+    check that the file system and the file-size limit have room for it.
+    """
+    nbytes = int(ds.nbytes)
+    if nbytes <= _IN_MEMORY_BYTES:
+        return write_bytes(path, ds.to_netcdf(engine="h5netcdf"))   # a memoryview
+    check_room(path, int(nbytes * 1.05) + 2**20)
+    with atomic_path(path) as tmp:
+        ds.to_netcdf(tmp, engine="h5netcdf")
     return path

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import xarray as xr
 
+from .._atomic import special_file
 from ..errors import FormatError, MvtkError, MvtkWarning, ParameterError, UnsupportedFormatError
 from ._build import clean_attrs
 from ._validate import validate
@@ -228,6 +229,9 @@ def read(path: str | os.PathLike, format: str | None = None, **options) -> xr.Da
         raise FileNotFoundError(f"read: no such file: {path}")
     if path.is_dir():
         raise FormatError(f"read: {path} is a directory; expected a measurement file")
+    kind = special_file(path)
+    if kind is not None:
+        raise FormatError(f"read: {path} is {kind}; expected a regular measurement file")
     if format is None:
         format = detect_format(path)
     elif format not in _REGISTRY:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import warnings
 from pathlib import Path
 
@@ -212,6 +213,9 @@ def _spectral_variables(items: list[dict], path: Path) -> list[xr.DataArray]:
                 values = values.real.copy()
         units = sorted({m["units"] for m in members})
         attrs = {"units": units[0] if len(units) == 1 else ", ".join(units), "uff_function": kind}
+        kinds = {m.get("frf_type", "") for m in members}
+        if kind == "frf" and len(kinds) == 1 and "" not in kinds:
+            attrs["frf_type"] = kinds.pop()  # from the record's data types and units
         rsp = [m["rsp"] for m in members]
         ref = [m["ref"] for m in members]
         pairs = list(zip(rsp, ref))
@@ -266,15 +270,54 @@ def _spectral_record(rec, data, path, index, kind):
             "increasing abscissa in Hz"
         )
     units = _check_units_text(_text(rec.get("ordinate_axis_units_lab")), path, index)
+    den = _check_units_text(_text(rec.get("orddenom_axis_units_lab")), path, index)
+    frf_type = ""
+    if kind == "frf":
+        frf_type = _frf_type(int(rec.get("ordinate_spec_data_type", 0) or 0),
+                             int(rec.get("orddenom_spec_data_type", 0) or 0), units, den)
+        if den not in _NONE and units not in _NONE and "/" not in units:
+            units = f"{units}/{den}"  # numerator over denominator: the FRF's own unit
     return {
         "kind": kind,
         "f": f,
         "data": data,
         "units": units,
+        "frf_type": frf_type,
         "rsp": _label(rec, "rsp", index),
         "ref": _label(rec, "ref", index),
         "record": index,
     }
+
+
+#: UFF 58 record 8/9 specific data types of FRF numerators, and the FRF they make
+#: over a force (type 9 reaction force or 13 excitation force).
+_FRF_OF_SPEC = {8: "receptance", 11: "mobility", 12: "accelerance"}
+_FRF_OF_QUANTITY = {"displacement": "receptance", "velocity": "mobility",
+                    "acceleration": "accelerance"}
+
+
+_PER_UNIT = re.compile(r"^\(1/([^)]+)\)\*\(([^)]+)\)$")
+
+
+def _frf_type(num_type: int, den_type: int, num_units: str, den_units: str) -> str:
+    """FRF type of a UFF 58 FRF record: from the numerator/denominator data types, else
+    from the numerator/denominator unit labels (``m/s^2`` over ``N``; a numerator label
+    ``(1/N)*(m/s2)`` states both); ``""`` when neither tells. A ``m/s`` followed by a
+    byte that is not UTF-8 (a Latin-1 superscript two, written by some tools) is read as
+    ``m/s^2`` for this decision only (the label is kept as read)."""
+    num_units = num_units.replace("m/s\ufffd", "m/s^2")
+    m = _PER_UNIT.match(num_units.replace(" ", ""))
+    if m is not None and den_units in _NONE:
+        den_units, num_units = m.group(1), m.group(2)
+    den_quantity = infer_quantity(normalize_units(den_units)) if den_units not in _NONE else ""
+    den_is_force = den_type in (9, 13) or den_quantity == "force"
+    if not den_is_force and den_type not in (0, 1) and den_units not in _NONE:
+        return "other"
+    if num_type in _FRF_OF_SPEC and (den_is_force or den_type in (0, 1)):
+        return _FRF_OF_SPEC[num_type]
+    if den_is_force and num_units not in _NONE:
+        return _FRF_OF_QUANTITY.get(infer_quantity(normalize_units(num_units)), "")
+    return ""
 
 
 def _mode_variable(records: list[tuple[int, dict]], path: Path) -> xr.DataArray:

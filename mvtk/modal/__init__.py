@@ -10,7 +10,15 @@ shapes ``("mode", "dof")``, synthesised FRFs, AutoMAC). Export to UFF 55/58 with
 """
 
 from ._export import write_frf_uff, write_modes_uff
-from ._frf import FRF_TYPES, as_frf_matrix, convert_frf, frf_matrix, reciprocal
+from ._frf import (
+    FRF_TYPES,
+    as_frf_matrix,
+    convert_frf,
+    frf_matrix,
+    frf_of_sets,
+    merge_frf,
+    reciprocal,
+)
 from ._identify import identify
 from ._lsfd import LsfdFit, lsfd, synthesise
 from ._plscf import plscf
@@ -41,10 +49,12 @@ __all__ = [
     "exact_frf",
     "exact_modes",
     "frf_matrix",
+    "frf_of_sets",
     "identify",
     "identify_output_only",
     "lsfd",
     "mac",
+    "merge_frf",
     "mpc",
     "mpd",
     "plscf",

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._atomic import atomic_path
 from ..errors import FormatError, ParameterError
 from ._frf import as_frf_matrix
 from ._result import IdentifiedModes
@@ -86,10 +87,8 @@ def write_modes_uff(modes: IdentifiedModes, path, *, shapes: str = "complex") ->
             rec[f"r{c + 1}"] = vals[:, c]
         sets.append(rec)
     path = Path(path)
-    if path.exists():
-        path.unlink()
-    uff = pyuff.UFF(str(path))
-    uff.write_sets(sets, mode="add")
+    with atomic_path(path) as tmp:
+        pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
     return path
 
 
@@ -140,7 +139,6 @@ def write_frf_uff(frf, path) -> Path:
                 data=h.values[o, i].astype(complex), x=f.astype(float),
             ))
     path = Path(path)
-    if path.exists():
-        path.unlink()
-    pyuff.UFF(str(path)).write_sets(sets, mode="add")
+    with atomic_path(path) as tmp:
+        pyuff.UFF(str(tmp)).write_sets(sets, mode="add")
     return path

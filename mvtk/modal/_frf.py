@@ -9,14 +9,23 @@ mobility and accelerance.
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
 import xarray as xr
 
-from ..errors import DimensionError, FormatError, ParameterError, UnitsError
+from ..errors import (
+    AccuracyWarning,
+    DimensionError,
+    DoubleHitError,
+    FormatError,
+    ParameterError,
+    UnitsError,
+)
 
-__all__ = ["frf_matrix", "as_frf_matrix", "convert_frf", "reciprocal", "FRF_TYPES"]
+__all__ = ["frf_matrix", "frf_of_sets", "merge_frf", "as_frf_matrix", "convert_frf", "reciprocal",
+           "FRF_TYPES"]
 
 #: FRF types and the power of ``i omega`` that turns a receptance into them.
 FRF_TYPES = {"receptance": 0, "mobility": 1, "accelerance": 2}
@@ -25,9 +34,10 @@ _KIND_OF_QUANTITY = {"displacement": "receptance", "velocity": "mobility",
 _DIR_RE = re.compile(r"^([+-]?)(x|y|z|rx|ry|rz)$")
 _DIMS = ("response", "reference", "frequency")
 #: coordinates of measured FRF matrices kept by :func:`as_frf_matrix`: the coherence
-#: ``(response, reference, frequency)`` and the excitation level in dB of each
-#: reference ``(reference, frequency)`` (from :func:`frf_matrix`).
-_CARRIED = ("coherence", "reference_level_db")
+#: ``(response, reference, frequency)``, the excitation level in dB of each
+#: reference ``(reference, frequency)`` and the verdict of the sets behind each pair
+#: ``pair_quality (response, reference)`` (from :func:`frf_matrix`).
+_CARRIED = ("coherence", "reference_level_db", "pair_quality")
 
 
 def _direction(value) -> str:
@@ -222,7 +232,8 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
         c = da.coords.get(name)
         if c is None and isinstance(obj, xr.Dataset) and name in obj.data_vars:
             c = obj[name]
-        if c is not None and set(c.dims) <= set(_DIMS) and "frequency" in c.dims:
+        if c is not None and c.dims and set(c.dims) <= set(_DIMS) and (
+                "frequency" in c.dims or name == "pair_quality"):
             order = [d for d in _DIMS if d in c.dims]
             out = out.assign_coords({name: c.transpose(*order).variable})
     keep = {k: v for k, v in attrs.items() if isinstance(v, (str, int, float))}
@@ -289,6 +300,10 @@ def reciprocal(frf) -> xr.DataArray:
     """
     h = as_frf_matrix(frf)
     vals = np.swapaxes(h.values, 0, 1)
+    # the measurement evidence of each pair follows it (coherence, set verdicts)
+    pairs = {name: (tuple({"response": "reference", "reference": "response"}.get(d, d)
+                          for d in h[name].dims), h[name].values)
+             for name in ("coherence", "pair_quality") if name in h.coords}
     return as_frf_matrix(xr.DataArray(
         vals, dims=_DIMS,
         coords={
@@ -302,7 +317,8 @@ def reciprocal(frf) -> xr.DataArray:
             "reference_direction": ("reference", h["direction"].values),
             "reference_quantity": ("reference", h["quantity"].values),
             "reference_units": ("reference", h["units"].values),
-        }, attrs=dict(h.attrs)))
+        }, attrs=dict(h.attrs)).assign_coords(
+            {name: (dims, values) for name, (dims, values) in pairs.items()}))
 
 
 def _one_set(x, reference, response, kwargs, index):
@@ -311,6 +327,8 @@ def _one_set(x, reference, response, kwargs, index):
     th = signal.as_time_history(x)
     try:
         ds = signal.frf(th, reference, response, **kwargs)
+    except DoubleHitError:
+        raise
     except (ParameterError, FormatError, DimensionError) as err:
         raise type(err)(f"measurement set {index}: {err}") from err
     chans = [str(c) for c in th["channel"].values]
@@ -338,7 +356,7 @@ def _one_set(x, reference, response, kwargs, index):
     )
     level = (ds["reference_level_db"].values if "reference_level_db" in ds.data_vars
              else np.full((len(fn), ds.sizes["frequency"]), np.nan))
-    return h, ds["coherence"].values, ds.attrs, level
+    return h, ds["coherence"].values, ds.attrs, level, ds
 
 
 def _key(node, direction, name):
@@ -378,7 +396,11 @@ def frf_matrix(
         ``{"quantity": "force"}``).
     estimator, excitation, **frf_options
         Passed to :func:`mvtk.signal.frf` (``nperseg``, ``window``, ``trigger_level``,
-        ``exponential_tau_s``...). All sets must give the same frequency lines.
+        ``exponential_tau_s``, ``double_hit``...). All sets must give the same frequency
+        lines. Impact tests get one policy for every set
+        (:func:`mvtk.signal.impact_policy`): one record length, pretrigger, FFT length and
+        one exponential window chosen from the slowest decay over the sets (values
+        given here are kept), stated in ``attrs["window_policy"]``.
         ``excitation="auto"`` (default) detects impact, sweep or random excitation from
         each set's reference, as :func:`mvtk.signal.frf` does; every set must be found
         the same.
@@ -392,30 +414,83 @@ def frf_matrix(
         ``("reference", "frequency")`` (each reference's autospectrum in dB re its
         largest value above 0 Hz, averaged over the sets that share the reference: how
         strongly each line was excited; :func:`identify` marks modes it missed) and
-        ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``.
+        ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``,
+        ``exponential_window_tau_s`` (s, the window every set shares, when one was
+        applied: its damping ``1/(tau omega_n)`` is in every pole), ``window_policy``
+        (impact) and ``set_quality``: the per-set quality table (double hits, clipped
+        channels, coherence, excitation level; :func:`mvtk.signal.set_quality` reads it
+        as a :class:`mvtk.signal.SetQuality`). A ``pair_quality`` coordinate
+        ``(response, reference)`` holds, for each pair, the verdicts of the sets behind
+        it that are not ``"ok"`` (``""`` when all are). A set whose every impact record
+        holds a double hit is refused (left out, named in an
+        :class:`~mvtk.errors.AccuracyWarning` and in the table).
 
     Raises
     ------
     DimensionError
         The sets give different frequency lines, or the merged grid misses pairs (the
         message lists them): every response must be measured with every reference.
+    DoubleHitError
+        Every set was refused for double hits.
     """
     if isinstance(sets, (xr.DataArray, xr.Dataset)):
         sets = [sets]
     if not isinstance(sets, Sequence) or not sets:
         raise ParameterError("frf_matrix: 'sets' must be a time history or a non-empty list")
+    from .. import signal
+
+    sources = [_source_of(x, k) for k, x in enumerate(sets)]
     kwargs = dict(estimator=estimator, excitation=excitation, **frf_options)
-    parts = [_one_set(x, reference, response, kwargs, k + 1) for k, x in enumerate(sets)]
-    kinds = [str(p[2].get("excitation", excitation)) for p in parts]
+    kinds = [excitation if excitation != "auto" else signal.set_excitation(x, reference)
+             for x in sets]
     for k, kind in enumerate(kinds):
         if kind != kinds[0]:
             raise ParameterError(
                 f"measurement set {k + 1}: {kind} excitation, but set 1 is {kinds[0]}; "
-                "pass excitation= explicitly to treat every set alike")
+                "pass excitation= explicitly to treat every set alike (set 1: "
+                f"{sources[0]}, set {k + 1}: {sources[k]})")
+    policy = None
+    if kinds[0] == "impact":
+        # one record, pretrigger, window and FFT length for the whole test (the values
+        # given are kept)
+        policy = signal.impact_policy(
+            sets, reference, response,
+            trigger_level=frf_options.get("trigger_level", 0.1),
+            double_hit_fraction=frf_options.get("double_hit_fraction",
+                                                signal.DOUBLE_HIT_FRACTION),
+            names=sources, nperseg=frf_options.get("nperseg"),
+            pretrigger=frf_options.get("pretrigger"),
+            exponential_tau_s=frf_options.get("exponential_tau_s", "auto"),
+            nfft=frf_options.get("nfft", "auto"))
+        kwargs.update(policy.frf_options(), excitation="impact")
+    parts, rows, refused = [], [], []
+    for k, x in enumerate(sets):
+        try:
+            part = _one_set(x, reference, response, kwargs, k + 1)
+        except DoubleHitError as err:
+            text = str(err)
+            refused.append(text if text.startswith(sources[k]) else f"{sources[k]}: {text}")
+            rows.append((k, err, None))
+            continue
+        parts.append(part)
+        rows.append((k, part[4], part[0]))
+    if refused:
+        warnings.warn(
+            f"frf_matrix: {len(refused)} of {len(sets)} measurement set(s) refused "
+            "(no clean impact record): " + "; ".join(refused), AccuracyWarning, stacklevel=2)
+    if not parts:
+        raise DoubleHitError("frf_matrix: every measurement set was refused: "
+                             + "; ".join(refused))
+    quality = signal.SetQuality(rows=tuple(
+        signal._impact.quality_row(
+            k + 1, sources[k], _peak_of(sets[k], reference), ds,
+            *(_labels(h, True), _labels(h, False)) if h is not None
+            else _channel_labels(sets[k], reference, response))
+        for k, ds, h in rows))
     f0 = parts[0][0]["frequency"].values
     rkeys: dict = {}
     fkeys: dict = {}
-    for k, (h, _, _, _) in enumerate(parts):
+    for k, (h, *_) in enumerate(parts):
         f = h["frequency"].values
         if f.shape != f0.shape or not np.allclose(f, f0):
             raise DimensionError(
@@ -437,7 +512,9 @@ def frf_matrix(
     psum = np.zeros(nf)
     rlist, flist = list(rkeys), list(fkeys)
     n_avg = 0
-    for h, c, attrs, level in parts:
+    flags = [[[] for _ in range(nf)] for _ in range(nr)]
+    good = [r for r in quality.rows if r["usable"]]
+    for (h, c, attrs, level, _), row in zip(parts, good):
         w = float(attrs.get("n_averages", 1))
         n_avg += int(attrs.get("n_averages", 1))
         ri = [rlist.index(_key(h["node"].values[i], h["direction"].values[i],
@@ -445,6 +522,10 @@ def frf_matrix(
         fi = [flist.index(_key(h["reference_node"].values[j],
                                h["reference_direction"].values[j], h["reference"].values[j]))
               for j in range(h.sizes["reference"])]
+        if row["verdict"] != "ok":
+            for a in ri:
+                for b in fi:
+                    flags[a][b].append(f"set {row['set']}: {row['verdict']}")
         acc[np.ix_(ri, fi)] += w * h.values
         power[fi] += w * 10 ** (level / 10)
         psum[fi] += w
@@ -496,12 +577,199 @@ def frf_matrix(
     out = as_frf_matrix(da)
     with np.errstate(divide="ignore"):
         level = 10 * np.log10(power / psum[:, None])
+    pair = np.array([["; ".join(v) for v in row] for row in flags], dtype=object).astype(str)
     out = out.assign_coords(coherence=(_DIMS, np.clip(coh, 0, 1)),
                             reference_level_db=(("reference", "frequency"), level,
-                                                {"units": "dB"}))
+                                                {"units": "dB"}),
+                            pair_quality=(("response", "reference"), pair))
     out.attrs.update(estimator=estimator, excitation=kinds[0], n_averages=n_avg,
                      n_sets=len(parts), window=str(a0.get("window", "")),
-                     df_hz=float(f0[1] - f0[0]))
-    if "exponential_window_tau_s" in a0:
-        out.attrs["exp_window_tau_s"] = float(a0["exponential_window_tau_s"])
+                     df_hz=float(f0[1] - f0[0]), set_quality=quality.to_json())
+    if policy is not None:
+        out.attrs["window_policy"] = policy.reason
+    taus = {float(p[2]["exponential_window_tau_s"]) for p in parts
+            if "exponential_window_tau_s" in p[2]}
+    if len(taus) == 1 and len(parts) == sum("exponential_window_tau_s" in p[2]
+                                            for p in parts):
+        tau = taus.pop()
+        out.attrs["exponential_window_tau_s"] = tau
+        out.attrs["exp_window_tau_s"] = tau
+    elif taus:
+        warnings.warn(
+            f"frf_matrix: the sets carry different exponential windows (tau = "
+            f"{sorted(taus)} s); their added damping differs from set to set and no single "
+            "correction removes it (leave exponential_tau_s, nperseg and nfft on 'auto' for "
+            "one window over the test)", AccuracyWarning, stacklevel=2)
     return out
+
+
+def _source_of(x, k: int) -> str:
+    """The file a measurement set was read from (``attrs["source"]``), else ``set k``."""
+    for obj in (x, x.get("time_history") if isinstance(x, xr.Dataset) else None):
+        if obj is not None and obj.attrs.get("source"):
+            return str(obj.attrs["source"])
+    return f"set {k + 1}"
+
+
+def _peak_of(x, reference) -> float:
+    from .. import signal
+
+    th = signal.as_time_history(x)
+    try:
+        values = th.sel(channel=signal._input.select_channels(
+            th, reference, name="reference")["channel"].values).values[0]
+    except (ParameterError, KeyError):
+        return float("nan")
+    return signal._impact.peak_force(values)
+
+
+def _channel_labels(x, reference, response):
+    """``node+direction`` (or names) of a set's reference and response channels."""
+    from .. import signal
+
+    th = signal.as_time_history(x)
+    sel = signal._input.select_channels
+    ref = sel(th, reference, name="reference")
+    names = {str(c) for c in ref["channel"].values}
+    resp = (th.isel(channel=[i for i, c in enumerate(th["channel"].values)
+                             if str(c) not in names])
+            if response is None else sel(th, response, name="response"))
+
+    def lab(da):
+        node = _coord(da, "node", "channel", -1)
+        direc = _coord(da, "direction", "channel", "")
+        return [f"{int(n)}{_direction(d)}" if int(n) >= 0 else str(c)
+                for c, n, d in zip(da["channel"].values, node, direc)]
+    return lab(ref), lab(resp)
+
+
+def _labels(h, is_ref: bool) -> list[str]:
+    if is_ref:
+        return [f"{n}{d}" if int(n) >= 0 else str(nm) for nm, n, d in zip(
+            h["reference"].values, h["reference_node"].values,
+            h["reference_direction"].values)]
+    return [f"{n}{d}" if int(n) >= 0 else str(nm) for nm, n, d in zip(
+        h["response"].values, h["node"].values, h["direction"].values)]
+
+
+def frf_of_sets(sets, reference=None, response=None, *, excitation: str = "auto",
+                **frf_options) -> xr.DataArray:
+    """FRF matrix of a test's measurement sets, test points on the response side.
+
+    :func:`frf_matrix` of the sets (reference default: the force channels); with more
+    references than responses (a roving hammer: one or a few fixed sensors, the hammer
+    at every test point) the matrix is turned by reciprocity (:func:`reciprocal`,
+    ``H_ij = H_ji``) so the mode shapes are estimated at the hammer points. Used by
+    ``mvtk modal`` and by the study's ``[modal] sets``.
+
+    Returns
+    -------
+    xarray.DataArray
+        As :func:`frf_matrix`, with ``attrs["reciprocity"]`` saying whether and why the
+        matrix was turned (``""`` if not).
+    """
+    ref = reference if reference is not None else {"quantity": "force"}
+    frf = frf_matrix(sets, ref, response, excitation=excitation, **frf_options)
+    note = ""
+    if frf.sizes["reference"] > frf.sizes["response"]:
+        frf = reciprocal(frf)
+        note = (f"roving hammer: {frf.sizes['response']} hammer points x "
+                f"{frf.sizes['reference']} sensor(s), turned by reciprocity (H_ij = H_ji)")
+    frf.attrs["reciprocity"] = note
+    return frf
+
+
+def merge_frf(mats, names=None) -> xr.DataArray:
+    """One FRF matrix from several, merged by node/direction of responses and references.
+
+    Each file of a test may hold one reference (a UFF 58 file per shaker or hammer
+    position) or a group of responses: the pairs are placed on a grid keyed by
+    ``(node, direction)`` of the response and of the reference (responses without a
+    node, ``node=-1``, by name prefixed with the file's name; references without a node
+    by name: the one unnamed reference of several files is the same excitation). A pair
+    measured in several matrices is averaged.
+
+    Parameters
+    ----------
+    mats : sequence of FRF matrices
+        Anything :func:`as_frf_matrix` adopts, on the same frequency lines and of one
+        FRF type.
+    names : sequence of str, optional
+        Names of the matrices (file names) for messages and unnamed channels.
+
+    Raises
+    ------
+    DimensionError
+        Different frequency lines, or the grid misses pairs (listed).
+    UnitsError
+        The matrices are of different FRF types (convert them first, :func:`convert_frf`).
+    """
+    hs = [as_frf_matrix(m) for m in mats]
+    names = list(names) if names is not None else [f"matrix {k + 1}" for k in range(len(hs))]
+    if len(hs) == 1:
+        return hs[0]
+    f0 = hs[0]["frequency"].values
+    kinds = {h.attrs["frf_type"] for h in hs}
+    if len(kinds) > 1:
+        found = ", ".join(f"{n}: {h.attrs['frf_type']}" for n, h in zip(names, hs))
+        raise UnitsError(f"merge_frf: the matrices are of different FRF types ({found}); "
+                         "convert them to one type first (mvtk.modal.convert_frf)")
+    rkeys: dict = {}
+    fkeys: dict = {}
+    for k, h in enumerate(hs):
+        f = h["frequency"].values
+        if f.shape != f0.shape or not np.allclose(f, f0):
+            raise DimensionError(f"{names[k]}: {f.size} lines up to {f[-1]:g} Hz; expected the "
+                                 f"{f0.size} lines of {names[0]}")
+        for i in range(h.sizes["response"]):
+            key = _key(h["node"].values[i], h["direction"].values[i],
+                       f"{names[k]}:{h['response'].values[i]}")
+            rkeys.setdefault(key, (k, i))
+        for j in range(h.sizes["reference"]):
+            key = _key(h["reference_node"].values[j], h["reference_direction"].values[j],
+                       str(h['reference'].values[j]))
+            fkeys.setdefault(key, (k, j))
+    rlist, flist = list(rkeys), list(fkeys)
+    acc = np.zeros((len(rlist), len(flist), f0.size), complex)
+    cnt = np.zeros((len(rlist), len(flist)))
+    for k, h in enumerate(hs):
+        ri = [rlist.index(_key(h["node"].values[i], h["direction"].values[i],
+                               f"{names[k]}:{h['response'].values[i]}"))
+              for i in range(h.sizes["response"])]
+        fi = [flist.index(_key(h["reference_node"].values[j], h["reference_direction"].values[j],
+                               str(h['reference'].values[j])))
+              for j in range(h.sizes["reference"])]
+        acc[np.ix_(ri, fi)] += h.values
+        cnt[np.ix_(ri, fi)] += 1
+    missing = np.argwhere(cnt == 0)
+    if missing.size:
+        lab = [f"{a}{b}" if a != "name" else b for a, b in rlist]
+        flab = [f"{a}{b}" if a != "name" else b for a, b in flist]
+        raise DimensionError(
+            f"merge_frf: the files do not measure {len(missing)} response/reference pair(s): "
+            + ", ".join(f"({lab[a]}, {flab[b]})" for a, b in missing[:8])
+            + "; every response must be measured with every reference")
+    acc /= cnt[..., None]
+
+    def coords(keys, table, is_ref):
+        cols = (("reference", "reference_node", "reference_direction", "reference_quantity",
+                 "reference_units") if is_ref else
+                ("response", "node", "direction", "quantity", "units"))
+        out = {c: [] for c in cols}
+        for key in keys:
+            k, i = table[key]
+            h = hs[k]
+            for c in cols:
+                v = h[c].values[i]
+                out[c].append(v)
+        label = [f"{n}{d}" if int(n) >= 0 else (str(nm) if is_ref
+                                                 else f"{names[table[key][0]]}:{nm}")
+                 for key, nm, n, d in zip(keys, out[cols[0]], out[cols[1]], out[cols[2]])]
+        dim = cols[0]
+        return {dim: label, **{c: (dim, out[c]) for c in cols[1:]}}
+
+    da = xr.DataArray(acc, dims=_DIMS,
+                      coords={**coords(rlist, rkeys, False), **coords(flist, fkeys, True),
+                              "frequency": f0},
+                      attrs={**hs[0].attrs, "n_files": len(hs)})
+    return as_frf_matrix(da)

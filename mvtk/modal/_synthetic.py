@@ -6,7 +6,7 @@ import numpy as np
 import scipy.linalg
 import xarray as xr
 
-from ..errors import DimensionError
+from ..errors import DimensionError, ParameterError
 from ._frf import FRF_TYPES, as_frf_matrix
 
 __all__ = ["exact_modes", "exact_frf"]
@@ -51,9 +51,23 @@ def exact_frf(M, C, K, f_hz, response_dofs, reference_dofs, *, frf_type="recepta
     M, C, K = (np.asarray(a, dtype=float) for a in (M, C, K))
     f = np.asarray(f_hz, dtype=float)
     n = M.shape[0]
+    for name, a in (("M", M), ("C", C), ("K", K)):
+        if a.shape != (n, n):
+            raise DimensionError(f"exact_frf: {name} has shape {a.shape}; expected ({n}, {n}) "
+                                 "(square, the size of M)")
     nodes = np.arange(1, n + 1) if nodes is None else np.asarray(nodes)
     directions = np.array(["+z"] * n) if directions is None else np.asarray(directions)
+    for name, a in (("nodes", nodes), ("directions", directions)):
+        if a.shape != (n,):
+            raise DimensionError(f"exact_frf: {name} has {a.size} entries; expected one per "
+                                 f"DOF of the model ({n})")
     ro, ri = list(response_dofs), list(reference_dofs)
+    for name, dofs in (("response_dofs", ro), ("reference_dofs", ri)):
+        bad = [d for d in dofs if isinstance(d, bool) or not isinstance(d, int | np.integer)
+               or not 0 <= int(d) < n]
+        if bad or not dofs:
+            raise ParameterError(f"exact_frf: {name} must be DOF indices in 0..{n - 1}, got "
+                                 f"{bad if bad else dofs}")
     w = 2 * np.pi * f
     Z = K[None] - (w**2)[:, None, None] * M[None] + 1j * w[:, None, None] * C[None]
     rhs = np.zeros((n, len(ri)))

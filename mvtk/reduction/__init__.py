@@ -8,6 +8,7 @@ Public API::
     compare_modes / static_check / size_table / verify / mac
     reduced_modes(K, M)  (modes of a reduced pencil whose M may be singular)
     super_element_from_config(model, reduction_table) -> (SuperElement, retained points)
+    with_electrodes(se, piezo_coupling) -> (SuperElement, B_r)  (piezo electrodes kept)
 """
 
 from ._config import (
@@ -19,6 +20,7 @@ from ._config import (
 )
 from ._craig_bampton import ReducedModes, SuperElement, craig_bampton, guyan, reduced_modes
 from ._effective_mass import EffectiveMassTable, effective_mass
+from ._electrodes import with_electrodes
 from ._verify import (
     ModeComparison,
     SizeTable,
@@ -53,4 +55,5 @@ __all__ = [
     "size_table",
     "static_check",
     "verify",
+    "with_electrodes",
 ]

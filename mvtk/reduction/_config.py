@@ -60,23 +60,12 @@ def local_element_size(model: FEModel, node: int) -> float:
     """Longest edge (m) of the elements around ``node`` (the local mesh size).
 
     Falls back to the distance to the nearest other node when the model lists no
-    element connectivity.
+    element connectivity (:func:`mvtk.fe._sanity.local_element_size`, which also bounds
+    the points of an imported mesh).
     """
-    edges = []
-    for conn in model.elements.values():
-        conn = np.asarray(conn)
-        if conn.ndim != 2 or conn.size == 0:
-            continue
-        rows = conn[np.any(conn == node, axis=1)]
-        if rows.size == 0:
-            continue
-        a, b = rows, np.roll(rows, -1, axis=1)
-        edges.append(np.linalg.norm(model.nodes[a] - model.nodes[b], axis=-1).ravel())
-    if edges:
-        return float(np.max(np.concatenate(edges)))
-    d = np.linalg.norm(model.nodes - model.nodes[node], axis=1)
-    d = d[d > 0]
-    return float(d.min()) if d.size else 0.0
+    from ..fe._sanity import local_element_size as size
+
+    return size(model, node)
 
 
 def snap_point(model: FEModel, xyz, where: str, tolerance: float | None = None):

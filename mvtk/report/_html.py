@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .._atomic import write_text
 from .._format import ColumnFormat, FormatSpec, dict_table
 from .._table import TABLE_CSS, html_table, render_table
 from ..errors import ParameterError
@@ -827,9 +828,9 @@ class Report:
         (out / "tables").mkdir(parents=True, exist_ok=True)
         for name, df in self.tables.items():
             show_index = df.index.name is not None or not isinstance(df.index, pd.RangeIndex)
-            df.to_csv(out / "tables" / f"{name}.csv", index=show_index)
+            write_text(out / "tables" / f"{name}.csv", df.to_csv(index=show_index))
         page = out / "index.html"
-        page.write_text(self.to_html(), encoding="utf-8")
+        write_text(page, self.to_html())
         return page
 
     def to_pdf(self, out_dir: str | Path, *, chromium: str | None = None,

@@ -8,6 +8,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from .._atomic import atomic_path
 from ..errors import MissingDependencyError, MvtkError, ParameterError
 
 __all__ = ["to_pdf", "find_chromium"]
@@ -87,10 +88,12 @@ def to_pdf(
     out = Path(pdf_path) if pdf_path is not None else page.with_name("report.pdf")
     out = out.resolve()
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.unlink(missing_ok=True)
-    with tempfile.TemporaryDirectory(prefix="mvtk-chromium-") as profile:
+    # printed to a temporary file next to the target and renamed when complete: a
+    # failed print leaves the previous PDF as it was
+    with atomic_path(out) as tmp, \
+            tempfile.TemporaryDirectory(prefix="mvtk-chromium-") as profile:
         cmd = [exe, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", "--no-pdf-header-footer",
-               "--run-all-compositor-stages-before-draw", f"--print-to-pdf={out}",
+               "--run-all-compositor-stages-before-draw", f"--print-to-pdf={tmp}",
                page.resolve().as_uri()]
         try:
             res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
@@ -98,11 +101,11 @@ def to_pdf(
         except subprocess.TimeoutExpired:
             raise PdfExportError(f"Chromium did not finish printing {page} within "
                                  f"{timeout:g} s") from None
-    if res.returncode != 0 or not out.is_file() or out.stat().st_size == 0:
-        tail = " | ".join((res.stderr or "").strip().splitlines()[-5:])
-        out.unlink(missing_ok=True)
-        raise PdfExportError(f"Chromium ({exe}) failed to print {page} to {out} (exit code "
-                             f"{res.returncode})" + (f": {tail}" if tail else ""))
-    if not out.read_bytes()[:5] == b"%PDF-":
-        raise PdfExportError(f"Chromium wrote {out} but it is not a PDF file")
+        if res.returncode != 0 or not tmp.is_file() or tmp.stat().st_size == 0:
+            tail = " | ".join((res.stderr or "").strip().splitlines()[-5:])
+            raise PdfExportError(f"Chromium ({exe}) failed to print {page} to {out} (exit "
+                                 f"code {res.returncode})" + (f": {tail}" if tail else ""))
+        with open(tmp, "rb") as fh:
+            if fh.read(5) != b"%PDF-":
+                raise PdfExportError(f"Chromium wrote {out} but it is not a PDF file")
     return out

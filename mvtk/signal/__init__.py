@@ -6,11 +6,31 @@ FRFs with coherence for random and impact excitation, ``find_peaks`` picks modes
 
 from ._curves import AmplitudeCurves, amplitude_curves
 from ._frf import auto_segment, exponential_window_correction, frf, frf_kind, is_impulsive, is_sweep
+from ._impact import (
+    CLIP_MIN_SAMPLES,
+    COHERENCE_MIN,
+    DOUBLE_HIT_FRACTION,
+    ImpactPolicy,
+    SetQuality,
+    clipped_channels,
+    impact_policy,
+    set_excitation,
+    set_quality,
+)
 from ._input import as_time_history, sampling_rate
 from ._peaks import MAX_PEAKS, PeakResult, find_peaks, noise_jitter_db
 from ._spectral import csd, psd
 
 __all__ = [
+    "CLIP_MIN_SAMPLES",
+    "COHERENCE_MIN",
+    "DOUBLE_HIT_FRACTION",
+    "ImpactPolicy",
+    "SetQuality",
+    "clipped_channels",
+    "impact_policy",
+    "set_excitation",
+    "set_quality",
     "MAX_PEAKS",
     "AmplitudeCurves",
     "PeakResult",

@@ -8,7 +8,8 @@ import numpy as np
 import scipy.fft
 import xarray as xr
 
-from ..errors import AccuracyWarning, FormatError, MvtkError, ParameterError
+from ..errors import AccuracyWarning, DoubleHitError, FormatError, MvtkError, ParameterError
+from ._impact import DOUBLE_HIT_FRACTION, clipped_channels, second_pulse
 from ._input import as_time_history, channel_coord, sampling_rate, select_channels
 from ._spectral import (
     _pair_coords,
@@ -89,48 +90,83 @@ def _find_hits(force: np.ndarray, level: float, quiet: int, dead: int) -> np.nda
     return np.asarray(hits, dtype=int)
 
 
-def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_n):
+def _primary_hits(hits: np.ndarray, n: int) -> np.ndarray:
+    """Hits that start records: a hit closer to the previous kept hit than a quarter of
+    the longest span between hits (or from the last hit to the end of the data) is a
+    second pulse (rebound) of that hit, not a hit of its own."""
+    if hits.size < 2:
+        return hits
+    longest = float(np.max(np.diff(np.r_[hits, n])))
+    keep = [int(hits[0])]
+    for h in hits[1:]:
+        if h - keep[-1] >= longest / 4:
+            keep.append(int(h))
+    return np.asarray(keep, dtype=int)
+
+
+def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_n,
+                    double_hit_fraction=DOUBLE_HIT_FRACTION):
+    """Records of an impact test: ``(starts, nperseg, pretrigger, width, doubles, info)``.
+
+    ``starts`` are the clean records; ``doubles`` the records holding a second force
+    pulse above ``double_hit_fraction`` x the hit's peak (dicts: ``start``, ``hit_s``,
+    ``second`` (sample), ``second_s``, ``ratio``); ``info`` has ``n_hits``,
+    ``short_s`` (hits too close to the ends) and ``available`` (the longest record the
+    hits allow, samples).
+    """
     force = force - np.median(force)  # the trigger works on the signal, not its offset
     peak = np.max(np.abs(force))
     level = trigger_level * peak
     if not level > 0:
         raise FormatError("reference: the force channel is all zeros; no hit to trigger on")
+    polarity = 1.0 if force[np.argmax(np.abs(force))] >= 0 else -1.0
     quiet = max(4, int(round(0.005 * fs)))
-    hits = _find_hits(force, level, quiet, force_window_n or 0)
     n = force.size
+    hits = _primary_hits(_find_hits(force, level, quiet, force_window_n or 0), n)
     auto = nperseg is None
     if pretrigger is None:
         # 1 % of the shortest hit-to-hit record, never more than the samples before hit 1
         gap = int(np.min(np.diff(np.r_[hits, n])))
         pretrigger = min(max(gap // 100, 1), int(hits[0]))
     pretrigger = int(pretrigger)
+    # the whole record: from pretrigger before a hit to pretrigger before the next
+    available = int(np.min(np.diff(np.r_[hits, n + pretrigger])))
     if auto:
-        # the whole record: from pretrigger before a hit to pretrigger before the next
-        gaps = np.diff(np.r_[hits, n + pretrigger])
-        nperseg = int(np.min(gaps))
+        nperseg = available
         if nperseg < 16:
             raise FormatError(f"reference: hits are only {nperseg} samples apart")
     nperseg = int(nperseg)
-    starts, double, short = [], [], []
-    for k, h in enumerate(hits):
+    starts, doubles, short = [], [], []
+    signed = polarity * force
+    prev = None
+    for h in hits:
         s = h - pretrigger
         if s < 0 or s + nperseg > n:
             short.append(h / fs)
             continue
-        nxt = hits[k + 1] if k + 1 < len(hits) else n
-        if nxt < s + nperseg:  # another hit inside this record
-            double.append(h / fs)
+        if prev is not None and h < prev + nperseg - pretrigger:
+            # this hit lies inside the previous hit's record: its own record starts on
+            # the previous response, still ringing (refused, never cut)
+            doubles.append({"start": int(s), "hit_s": float(prev / fs), "second": int(s),
+                            "second_s": float(h / fs), "preceded": True, "ratio": float(
+                                signed[h:h + 8].max() / signed[prev:prev + 8].max())})
+            prev = int(h)
+            continue
+        prev = int(h)
+        second = second_pulse(signed, int(h), s + nperseg, level, double_hit_fraction)
+        if second is not None:
+            doubles.append({"start": int(s), "hit_s": float(h / fs), "second": second[0],
+                            "second_s": float(second[0] / fs), "ratio": second[1]})
             continue
         starts.append(s)
-    if double or short:
+    if short:
         warnings.warn(
-            f"impact FRF: rejected {len(double)} record(s) with a second hit inside the record "
-            f"(hits at {[round(t, 4) for t in double]} s) and {len(short)} hit(s) too close "
-            f"to the ends of the data (at {[round(t, 4) for t in short]} s); "
-            f"nperseg={nperseg}, pretrigger={pretrigger} samples",
+            f"impact FRF: {len(short)} hit(s) too close to the ends of the data (at "
+            f"{[round(float(t), 4) for t in short]} s) for a record of {nperseg} samples with "
+            f"{pretrigger} pretrigger; not used",
             AccuracyWarning, stacklevel=3,
         )
-    if not starts:
+    if not starts and not doubles:
         raise FormatError(
             f"reference: no complete impact record found ({len(hits)} hit(s) above "
             f"{trigger_level:g} x peak force; nperseg={nperseg}, pretrigger={pretrigger})"
@@ -138,14 +174,62 @@ def _impact_records(force, nperseg, pretrigger, trigger_level, fs, force_window_
     # pulse width: the run of samples above the trigger level that starts each hit
     above = np.abs(force) >= level
     widths = []
-    for s in starts:
+    for s in [*starts, *(d["start"] for d in doubles)]:
         h = s + pretrigger
         e = h
         while e < n and above[e]:
             e += 1
         widths.append(e - h)
-    return np.asarray(starts, dtype=int), nperseg, pretrigger, max(max(widths), 1)
+    info = {"n_hits": int(hits.size), "short_s": short, "available": available}
+    return (np.asarray(starts, dtype=int), nperseg, pretrigger, max(max(widths), 1),
+            doubles, info)
 
+
+
+def _tau_for_tail(tail: float, nperseg: int, pre: int, fs: float) -> float:
+    """Exponential time constant (s) that brings a record's tail ratio to 1 %: reached
+    where the tail measurement starts (5 % before the end of the record)."""
+    span = nperseg - pre - max(nperseg // 20, 4)
+    return span / fs / np.log(tail / 0.01)
+
+
+def _double_text(d: dict, record_s: float) -> str:
+    """One double hit in words (time, ratio, what was done)."""
+    if d.get("preceded"):
+        return (f"the hit at {d['second_s']:.4g} s lies inside the {record_s:.4g} s record "
+                f"of the hit at {d['hit_s']:.4g} s, its record starts on that response: "
+                "refused")
+    what = (f"cut at {d['second_s']:.4g} s (windowed response {d['cut_tail']:.1%} of its "
+            "peak there)" if d["action"] == "cut" else
+            f"refused (cutting it there would leave the windowed response at "
+            f"{d['cut_tail']:.0%} of its peak)")
+    return (f"a second force pulse at {d['second_s']:.4g} s ({d['ratio']:.0%} of the hit at "
+            f"{d['hit_s']:.4g} s) inside its record of {record_s:.4g} s, record {what}")
+
+
+def _double_hits(y, doubles, nperseg: int, pre: int, win_y, policy: str):
+    """Decide each double-hit record: cut before its second pulse or refuse it.
+
+    ``"auto"`` cuts when the windowed response has decayed to 1.1 % of its peak where
+    the second pulse starts (the truncation then costs no more than the window's own
+    end), ``"cut"`` always, ``"refuse"`` never. Sets ``action`` and ``cut_tail`` on
+    every dict; returns ``[(record start, samples kept)]`` of the cut records.
+    """
+    cuts = []
+    for d in doubles:
+        s, c = d["start"], d["second"] - d["start"]
+        seg = y[:, s:s + nperseg] * win_y
+        pk = np.max(np.abs(seg[:, pre:]), axis=-1)
+        m = max(nperseg // 20, 4)
+        lo = max(c - m, pre + 1)
+        rms = np.sqrt(np.mean(seg[:, lo:c] ** 2, axis=-1)) if c > lo else pk
+        ok = pk > 0
+        d["cut_tail"] = float(np.max(rms[ok] / pk[ok])) if ok.any() else 1.0
+        cut = policy == "cut" or (policy == "auto" and d["cut_tail"] <= 0.011)
+        d["action"] = "cut" if cut and c > pre else "refused"
+        if d["action"] == "cut":
+            cuts.append((s, c))
+    return cuts
 
 def _check_excitation(r: np.ndarray, names) -> None:
     """Refuse a reference channel without excitation (constant or all zeros)."""
@@ -292,6 +376,8 @@ def frf(
     force_window_s="auto",
     exponential_tau_s="auto",
     nfft="auto",
+    double_hit: str = "auto",
+    double_hit_fraction: float = DOUBLE_HIT_FRACTION,
 ) -> xr.Dataset:
     """Frequency response functions and coherence from reference and response channels.
 
@@ -318,8 +404,10 @@ def frf(
         crossings less than max(4 samples, 5 ms) after the force fell below the level,
         e.g. anti-alias ringing, belong to the same hit), starting ``pretrigger``
         samples before the crossing (default 1 % of the record, at most the samples
-        before the first hit); records with a second hit are rejected with an
-        :class:`~mvtk.errors.AccuracyWarning`. Default window is rectangular.
+        before the first hit); a record holding a second force pulse (a double hit) is
+        cut before it or refused (see ``double_hit``) with an
+        :class:`~mvtk.errors.AccuracyWarning`, and clipped channels are named. Default
+        window is rectangular.
         ``"sweep"``: deterministic excitation (sine sweep, chirp, stepped sine): one
         record, the whole time history, rectangular window by default (Hann if a
         shorter ``nperseg`` is given; no averaging
@@ -358,6 +446,19 @@ def frf(
         within the record, the record is zero-padded to the next power of two >= 8 x its
         length; the lines then interpolate the spectrum of the complete transient (the
         frequency resolution stays ``1 / record``, stated as ``attrs["resolution_hz"]``).
+    double_hit : {"auto", "cut", "refuse"}
+        Impact only: what to do with a record that holds a second force pulse above
+        ``double_hit_fraction`` x its hit's peak (a rebound of the hammer, or the next
+        hit inside the record). ``"cut"``: the record (force and response) ends before
+        the second pulse; ``"refuse"``: the record is not averaged; ``"auto"``: cut when
+        the (windowed) response has decayed to 1.1 % of its peak where the second pulse
+        starts, refused otherwise. Every double hit is named (time, ratio, action) in an
+        :class:`~mvtk.errors.AccuracyWarning` and in ``attrs``. A hit closer to the
+        previous one than a quarter of the longest hit-to-hit span is a rebound of it and
+        starts no record of its own.
+    double_hit_fraction : float
+        Impact only: threshold of the double-hit detector, a fraction of the hit's peak
+        force (default :data:`mvtk.signal.DOUBLE_HIT_FRACTION`).
 
     Returns
     -------
@@ -371,7 +472,13 @@ def frf(
         one quantity and the reference is a force), ``tail_ratio`` (impact),
         ``excitation_band_hz`` (impact: where the force spectrum is within 20 dB of its
         low-frequency level; peak picking stays inside it by default) and
-        ``exponential_window_tau_s`` (also ``exp_window_tau_s``) when applied.
+        ``exponential_window_tau_s`` (also ``exp_window_tau_s``) when applied; impact
+        also ``n_hits``, ``record_available`` (longest record the hits allow, samples),
+        ``double_hit_s`` / ``double_hit_ratio`` / ``double_hit_action`` (one entry per
+        double hit: time of the second pulse in s, its peak over the hit's, ``"cut"`` or
+        ``"refused"``) and ``clipped`` (channels whose extreme is a flat top of at least
+        :data:`mvtk.signal.CLIP_MIN_SAMPLES` samples, the ADC range; ``""`` if none, a
+        :class:`~mvtk.errors.AccuracyWarning` names them).
         ``reference_level_db``: autospectrum of each reference per line in dB re its
         largest value above 0 Hz (how strongly each line was excited).
 
@@ -379,6 +486,8 @@ def frf(
     ------
     mvtk.errors.FormatError
         A reference channel is constant (no excitation) or no impact record is complete.
+    mvtk.errors.DoubleHitError
+        Every impact record holds a double hit and none could be cut.
 
     Notes
     -----
@@ -457,35 +566,51 @@ def frf(
         if noverlap is not None:
             raise ParameterError("noverlap applies to excitation='random' only")
         window = "boxcar" if window is None else window
-        starts, nperseg, pre, width = _impact_records(
+        if double_hit not in ("auto", "cut", "refuse"):
+            raise ParameterError(
+                f"double_hit must be 'auto', 'cut' or 'refuse', got {double_hit!r}")
+        raw = np.vstack([r, y])
+        starts, nperseg, pre, width, doubles, info = _impact_records(
             r[0], nperseg, pretrigger, trigger_level, fs,
             None if force_window_s in ("auto", None) else
-            int(round(_positive(force_window_s, "force_window_s") * fs)))
+            int(round(_positive(force_window_s, "force_window_s") * fs)),
+            double_hit_fraction)
+        where = f"{x.attrs['source']}: " if x.attrs.get("source") else ""
+        clipped = clipped_channels(raw, ref_names + [str(c) for c in resp["channel"].values],
+                                   fs)
+        if clipped:
+            warnings.warn(
+                f"{where}impact FRF: clipped channel(s), a flat top at the ADC range: "
+                + "; ".join(f"{c['channel']!r} at {c['value']:g} for {c['n_samples']} "
+                            f"samples from {c['time_s']:.4g} s" for c in clipped)
+                + " (the FRF near the peak excitation is wrong; repeat with a larger range)",
+                AccuracyWarning, stacklevel=2)
+        attrs["clipped"] = "; ".join(f"{c['channel']} at {c['value']:g}" for c in clipped)
         fw_n = None
         if force_window_s == "auto":
             fw_n = min(max(4 * width, 8), nperseg - pre)
             force_window_s = fw_n / fs
         elif force_window_s is not None:
             fw_n = int(round(_positive(force_window_s, "force_window_s") * fs))
+        every = np.asarray([*starts, *(d["start"] for d in doubles)], dtype=int)
         if detrend == "auto":
             # a hammer force is zero outside its pulses: its offset is the median
             r = r - np.median(r, axis=-1, keepdims=True)
             attrs["offset_removed"] = "force: median of the record"
             if pre >= 8:
-                y = y - _pretrigger_offset(y, starts, pre)[:, None]
+                y = y - _pretrigger_offset(y, every, pre)[:, None]
                 attrs["offset_removed"] += "; response: pretrigger mean"
             detrend = False
         win = _window(window, nperseg)
         win_y = win.copy()
         win_r = win.copy()
-        tail = _tail_ratio(y, starts, nperseg, pre, win)
+        clean = starts if starts.size else every
+        tail = _tail_ratio(y, clean, nperseg, pre, win)
         attrs["tail_ratio"] = tail
         if exponential_tau_s == "auto":
             exponential_tau_s = None
             if tail > 0.01:
-                # reach 1 % where the tail measurement starts (5 % before the end)
-                span = nperseg - pre - max(nperseg // 20, 4)
-                exponential_tau_s = span / fs / np.log(tail / 0.01)
+                exponential_tau_s = _tau_for_tail(tail, nperseg, pre, fs)
         if exponential_tau_s is not None:
             _positive(exponential_tau_s, "exponential_tau_s")
             k = np.arange(nperseg)
@@ -494,10 +619,33 @@ def frf(
             win_r *= expo
             attrs["exponential_window_tau_s"] = float(exponential_tau_s)
             attrs["exp_window_tau_s"] = float(exponential_tau_s)
-            tail = _tail_ratio(y, starts, nperseg, pre, win_y)
+            tail = _tail_ratio(y, clean, nperseg, pre, win_y)
         if fw_n is not None:
             win_r[pre + fw_n:] = 0.0
             attrs["force_window_s"] = float(force_window_s)
+        cuts = _double_hits(y, doubles, nperseg, pre, win_y, double_hit)
+        if doubles:
+            warnings.warn(
+                f"{where}impact FRF: double hit: "
+                + "; ".join(_double_text(d, nperseg / fs) for d in doubles)
+                + f" (threshold {double_hit_fraction:g} x the hit's peak)",
+                AccuracyWarning, stacklevel=2)
+        attrs["n_hits"] = info["n_hits"]
+        attrs["record_available"] = int(info["available"])
+        attrs["double_hit_s"] = [float(d["second_s"]) for d in doubles]
+        attrs["double_hit_ratio"] = [float(d["ratio"]) for d in doubles]
+        attrs["double_hit_action"] = [str(d["action"]) for d in doubles]
+        attrs["double_hit_fraction"] = float(double_hit_fraction)
+        if not starts.size and not cuts:
+            err = DoubleHitError(
+                f"{where}every impact record holds a double hit ("
+                + ", ".join(f"second pulse at {d['second_s']:.4g} s, {d['ratio']:.0%} of the "
+                            f"hit at {d['hit_s']:.4g} s" for d in doubles)
+                + f"); no clean record of {nperseg / fs:.4g} s is left: repeat the hit or "
+                "pass double_hit='cut' to end the record before the second pulse")
+            err.double_hits = [{k: d[k] for k in ("hit_s", "second_s", "ratio")}
+                               for d in doubles]
+            raise err
         if nfft == "auto":
             nfft_used = nperseg
             if auto_seg and tail <= 0.011:
@@ -516,6 +664,12 @@ def frf(
             reason += f", exponential window tau = {attrs['exponential_window_tau_s']:.4g} s"
         gyr, grr, gyy = accumulate_cross(y, r, starts, nperseg, win_y, win_r, detrend,
                                          nfft=nfft_used)
+        for s0, c in cuts:  # records ended before their second pulse
+            keep = (np.arange(nperseg) < c).astype(float)
+            g = accumulate_cross(y, r, np.asarray([s0]), nperseg, win_y * keep,
+                                 win_r * keep, detrend, nfft=nfft_used)
+            gyr, grr, gyy = gyr + g[0], grr + g[1], gyy + g[2]
+        starts = np.sort(np.r_[starts, [s0 for s0, _ in cuts]]).astype(int)
         attrs.update(window=str(window), pretrigger=int(pre),
                      hit_times_s=[float((s + pre) / fs) for s in starts])
 

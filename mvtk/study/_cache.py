@@ -37,7 +37,9 @@ from typing import Any
 
 import numpy as np
 
+from .._atomic import atomic_path, write_bytes
 from ..errors import MvtkError, MvtkWarning
+from ..io._netcdf import write_h5netcdf
 
 __all__ = ["stage_key", "code_hash", "StageCache", "to_jsonable", "ReadTracker",
            "TrackedStudy", "CacheWarning", "OutputLock", "OutputBusyError"]
@@ -173,7 +175,7 @@ def _write_arrays(ds, path: Path) -> None:
         except (ValueError, TypeError, OverflowError):
             with contextlib.suppress(OSError):
                 path.unlink()
-    ds.to_netcdf(path, engine="h5netcdf")
+    write_h5netcdf(ds, path)
 
 
 def _read_arrays(path: Path):
@@ -360,12 +362,7 @@ class TrackedStudy:
 
 # ------------------------------------------------------------------------------ cache
 def _atomic_write_bytes(path: Path, data: bytes) -> None:
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "wb") as fh:
-        fh.write(data)
-        fh.flush()
-        os.fsync(fh.fileno())
-    os.replace(tmp, path)
+    write_bytes(path, data)
 
 
 class StageCache:
@@ -475,12 +472,9 @@ class StageCache:
         nc = self.directory / f"{stage}.nc"
         arrays_sha = None
         if ds is not None:
-            tmp = nc.with_name(f".{nc.name}.{os.getpid()}.tmp")
-            _write_arrays(ds, tmp)
-            with open(tmp, "rb+") as fh:
-                os.fsync(fh.fileno())
-            arrays_sha = _file_sha256(tmp)
-            os.replace(tmp, nc)
+            with atomic_path(nc) as tmp:
+                _write_arrays(ds, tmp)
+                arrays_sha = _file_sha256(tmp)
         elif nc.exists():
             nc.unlink()
         text = json.dumps({"base": base, "key": full, "reads": reads,

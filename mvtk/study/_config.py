@@ -17,7 +17,8 @@ module adds the cross-key rules and resolves the files. Overview (see
     [updating]         targets_hz, max_iter, [[updating.parameters]] path, initial,
                        lower, upper
     [reduction]        n_modes, n_compare, plant_modes, [[reduction.retained]] name, xyz
-    [control]          actuator_nodes, sensor_node, patch, actuator_limit_v,
+    [control]          actuator_nodes | actuators + sensors (+ sensing, zeta),
+                       sensor_node, patch, actuator_limit_v,
                        initial_tip_displacement_m, t_end_s, fs_out, settle_band,
                        [[control.controllers]] name, type, ... (gains and u_max in V)
     [uncertainty]      optional Monte-Carlo propagation on the updated structure:
@@ -45,6 +46,7 @@ import copy
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from ..errors import ConfigError
 from ._schema import CONTROLLER_SCHEMAS, SCHEMA, STRUCTURE_TABLES, validate
@@ -110,10 +112,30 @@ class Study:
 
     @property
     def input_files(self) -> list[Path]:
+        """Every file the study reads: the study, the structure, the mesh files the
+        structure names (``file`` keys), the measurements and the modal files."""
         files = [self.path]
         if self.structure_file is not None:
             files.append(self.structure_file)
+        files += _named_files(self.structure, self.structure_file or self.path)
         return files + list(self.measurement_files.values()) + list(self.extra_files.values())
+
+
+def _named_files(desc: Any, base: Path) -> list[Path]:
+    """Existing files named by a ``file`` key anywhere in a structure description."""
+    out: list[Path] = []
+    if isinstance(desc, Mapping):
+        for key, val in desc.items():
+            if key == "file" and isinstance(val, str):
+                p = Path(val) if Path(val).is_absolute() else base.parent / val
+                if p.is_file():
+                    out.append(p)
+            else:
+                out += _named_files(val, base)
+    elif isinstance(desc, list | tuple):
+        for val in desc:
+            out += _named_files(val, base)
+    return out
 
 
 def load_study(path: str | Path) -> Study:
@@ -203,7 +225,16 @@ def load_study(path: str | Path) -> Study:
             raise ConfigError("[control] needs a [reduction] section (the plant is the SE)")
         known = {str(it["name"]) for it in cfg["reduction"]["retained"]
                  if isinstance(it, Mapping) and it.get("name") is not None}
+        if c.get("actuators") is None and c.get("actuator_nodes") is None:
+            raise ConfigError("control.actuator_nodes: required (the two retained "
+                              "actuator-edge nodes), or name piezo patches in "
+                              "control.actuators")
+        if c.get("actuators") is not None and c.get("sensors") is None:
+            raise ConfigError("control.sensors: required with control.actuators (the "
+                              "piezo patches or electrodes the controllers read)")
         for key in ("actuator_nodes", "sensor_node"):
+            if c.get(key) is None:
+                continue
             val = c[key]
             vals = val if isinstance(val, list) else [val]
             bad = [v for v in vals if v not in known]

@@ -65,17 +65,12 @@ def _frf_of_sets(paths, options, reference, excitation):
                               f"(variables {list(ds.data_vars)}); expected force and response "
                               "channels")
         sets.append(ds["time_history"])
-    ref = reference if reference is not None else {"quantity": "force"}
     try:
-        frf = mvtk.modal.frf_matrix(sets, ref, excitation=excitation)
+        frf = mvtk.modal.frf_of_sets(sets, reference, excitation=excitation)
     except MvtkError as err:
         names = ", ".join(p.name for p in paths)
         raise ConfigError(f"modal.sets ({names}): {err}") from err
-    note = ""
-    if frf.sizes["reference"] > frf.sizes["response"]:
-        frf = mvtk.modal.reciprocal(frf)
-        note = (f"roving hammer: {frf.sizes['response']} hammer points x "
-                f"{frf.sizes['reference']} sensor(s), turned by reciprocity (H_ij = H_ji)")
+    note = frf.attrs["reciprocity"]
     return frf, note
 
 
@@ -94,19 +89,19 @@ def modal(study):
     cfg = study.section("modal")
     options = dict(cfg.get("read_options") or {})
     note = ""
-    if study.has_extra_file("modal_file"):
-        path = study.extra_file("modal_file")
-        frf = _frf_of(path, options)
-        source = path.name
-    else:
-        paths = [study.extra_file(f"modal_set_{k + 1}") for k in range(len(cfg["sets"]))]
-        frf, note = _frf_of_sets(paths, options, cfg.get("reference"), cfg["excitation"])
-        source = f"{len(paths)} measurement sets ({paths[0].name} ... {paths[-1].name})"
     orders = None
     if cfg.get("max_order") is not None:
         orders = range(2, int(cfg["max_order"]) + 1)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        if study.has_extra_file("modal_file"):
+            path = study.extra_file("modal_file")
+            frf = _frf_of(path, options)
+            source = path.name
+        else:
+            paths = [study.extra_file(f"modal_set_{k + 1}") for k in range(len(cfg["sets"]))]
+            frf, note = _frf_of_sets(paths, options, cfg.get("reference"), cfg["excitation"])
+            source = f"{len(paths)} measurement sets ({paths[0].name} ... {paths[-1].name})"
         res = mvtk.modal.identify(frf, float(cfg["fmin_hz"]), float(cfg["fmax_hz"]),
                                   orders=orders)
     table = res.to_dataframe()
@@ -127,6 +122,11 @@ def modal(study):
         "figures": figures,
         "warnings": [f"{w.category.__name__}: {w.message}" for w in caught],
     }
+    if frf.attrs.get("set_quality"):  # measurement sets: what each set was worth
+        import json
+
+        result["set_quality"] = json.loads(frf.attrs["set_quality"])
+        result["window_policy"] = str(frf.attrs.get("window_policy", ""))
     ds = xr.Dataset({"shapes": xr.DataArray(
         np.asarray(shapes.values, dtype=float), dims=("mode", "dof"),
         coords={"mode": shapes["mode"].values, "dof": [str(d) for d in shapes["dof"].values],

@@ -16,12 +16,14 @@ commented candidate for a beam section or a support.
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from .._atomic import write_text
 from ..errors import ConfigError, MvtkError
 
 __all__ = ["init_study", "InitResult", "STRUCTURE_TEMPLATE", "mesh_structure_toml"]
@@ -264,10 +266,10 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         if not is_toml:
             text = mesh_structure_toml(s_path, folder)
             s_path = folder / "structure.toml"
-            s_path.write_text(text, encoding="utf-8")
+            write_text(s_path, text)
     else:
         s_path = folder / "structure.toml"
-        s_path.write_text(STRUCTURE_TEMPLATE, encoding="utf-8")
+        write_text(s_path, STRUCTURE_TEMPLATE)
 
     tests = [_classify(Path(m), read_options) for m in measurements]
 
@@ -388,7 +390,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             *opts_line(*roving),
             "",
         ]
-    study_path.write_text("\n".join(lines), encoding="utf-8")
+    write_text(study_path, "\n".join(lines))
     try:
         load_study(study_path)
     except ConfigError as err:
@@ -556,6 +558,25 @@ def mesh_structure_toml(mesh: str | Path, folder: str | Path) -> str:
                 "# height = 0.01           # m",
                 "# orientation = [0, 0, 1] # EDIT: a direction not along the beam",
                 ""]
+    example = shells[0] if shells else "<element set>"
+    out += [
+        "# Piezo patches (optional): bonded on an element set of surface cells or on a",
+        "# region of the surface (box, circle or polygon in the tangent plane at origin);",
+        "# their piezo plies become electrodes (docs: 'Piezo patches on any shell').",
+        "# [materials.pic151]       # PI Ceramic PIC 151 datasheet values",
+        "# E = 66.667e9",
+        "# nu = 0.34",
+        "# rho = 7800",
+        "# d31 = -210e-12          # m/V",
+        "# eps33 = 2.125e-8        # F/m (2400 eps0)",
+        "# [[patches]]",
+        '# name = "pzt"',
+        f"# element_set = {json.dumps(example)}   # or:",
+        '# # region = { shape = "box", origin = [x, y, z], u = [-0.02, 0.02], v = [-0.01, 0.01] }',
+        '# layers = [{ material = "pic151", thickness = 0.25e-3 }]   # from the base outwards',
+        '# side = "top"',
+        "",
+    ]
     node_sets = sorted(m.node_sets)
     out += [
         "[boundary]",

@@ -283,8 +283,11 @@ def _child_main(conn, compute, study, parent_pid, close_fds) -> None:
 
     from ._cache import to_jsonable
 
-    # Ctrl-C goes to the main process, which ends this one
+    # Ctrl-C goes to the main process, which ends this one (SIGINT was blocked across
+    # the fork, so a Ctrl-C in that window is discarded here, never a traceback)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    with contextlib.suppress(AttributeError, OSError, ValueError):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
     die_with_parent()
     if os.getppid() != parent_pid:   # the parent died before prctl took effect
         os._exit(1)
@@ -324,9 +327,24 @@ class _Background:
         self._proc = ctx.Process(target=_child_main,
                                  args=(send, compute, study, os.getpid(), close),
                                  daemon=True)
-        self._proc.start()
+        self._start_without_sigint()
         send.close()
         self.wall_s = self.cpu_s = float("nan")
+
+    def _start_without_sigint(self) -> None:
+        """Fork with SIGINT blocked: the child ignores it before it can arrive; in this
+        process a Ctrl-C pressed meanwhile is delivered once the mask is restored."""
+        import signal
+
+        try:
+            old = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        except (AttributeError, OSError, ValueError):   # no POSIX masks here
+            self._proc.start()
+            return
+        try:
+            self._proc.start()
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
     def result(self, s: TrackedStudy):
         try:
@@ -554,6 +572,9 @@ def _run_locked(study: Study, out: Path, *, use_cache, progress, report, stages,
                               failed=dict(failed), cache_hits=hits,
                               timings_s=dict(timings))
         report_path = build_report(partial, hashes)
+        from ._manifest import write_manifest
+
+        write_manifest(out, report_path)   # last: it vouches for what was written
     timings["report"] = time.perf_counter() - t0
     cpu["report"] = time.process_time() - c0
     if report:

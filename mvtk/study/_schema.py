@@ -380,9 +380,24 @@ SCHEMA: dict[str, Table] = {
         at_most_one_of=(("n_modes", "mass_fraction", "f_cut_hz"),)),
     "control": Table(
         "Controllers on the SE plant, released from mode 1 (mvtk.control).",
-        {"actuator_nodes": Key("strings", "The two retained actuator-edge nodes.", REQUIRED,
-                               length=2),
+        {"actuator_nodes": Key("strings", "The two retained actuator-edge nodes of the "
+                               "pin-force actuator (required unless 'actuators' names "
+                               "piezo electrodes).", None, length=2),
          "sensor_node": Key("str", "Retained node of the tip sensor (uz).", REQUIRED),
+         "actuators": Key("strings", "Piezo patches or electrodes driven by the controllers "
+                          "(mvtk.fe.piezo_coupling on any shell structure); the plant "
+                          "input is the first one's voltage.", None, min_length=1),
+         "sensors": Key("strings", "Piezo patches or electrodes read by the controllers "
+                        "(charge or voltage, see 'sensing'); the first one is the "
+                        "controllers' measurement.", None, min_length=1),
+         "sensing": Key("str", "How the piezo sensors are read: 'charge' (shorted, a "
+                        "charge amplifier) or 'voltage' (open electrodes).", "charge",
+                        choices=("charge", "voltage")),
+         "release_mode": Key("int", "Plant mode released (and whose damping the table "
+                             "reports); 1 = the first.", 1, minimum=1),
+         "zeta": Key("number", "Modal damping ratio of the piezo plant when the study has "
+                     "no [damping] (the Rayleigh pair of [damping] otherwise).", None,
+                     minimum=0.0, exclusive_minimum=True, maximum=1.0),
          "patch": Key("str", "Patch of the structure driving the plant (None: the only "
                       "patch).", None),
          "actuator_limit_v": _pos("Actuator voltage limit checked in the report.", 100.0,

@@ -624,7 +624,12 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         "interior_fn_hz": se.interior_fn_hz,
     }
     ds = None
-    if ctl and model_damping is not None:
+    if ctl and ctl.get("actuators"):
+        result["actuator"], ds = _piezo_plant(model, se, named, cfg, ctl, model_damping)
+        fe_hz = np.asarray(ver.modes.fe_hz, dtype=float)
+        result["fe_fn_hz_updated"] = (fe_hz if fe_hz.min() > 1e-3 * fe_hz.max()
+                                      else modal_analysis(model, n_cmp).fn_hz)
+    elif ctl and model_damping is not None:
         act = patch_actuator(description, ctl.get("patch"))
         single = {p.name: p for p in points}
         for key in ("actuator_nodes", "sensor_node"):
@@ -646,6 +651,15 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         u = static_solve(model, np.column_stack([load, line.load_vector(model)]))
         act["tip_per_volt_nodes_m"] = float(tip_row @ u[:, 0])
         act["tip_per_volt_edge_lines_m"] = float(tip_row @ u[:, 1])
+        if model.meta.get("piezo_patches"):
+            # the same patch coupled in the shells (biaxial induced strain), a printed
+            # cross-check of the pin-force idealisation the plant keeps
+            from ..fe import piezo_coupling
+
+            cpl = piezo_coupling(model)
+            if act["name"] in cpl.names:
+                b = cpl.B[:, cpl.names.index(act["name"])]
+                act["tip_per_volt_shell_coupled_m"] = float(tip_row @ static_solve(model, b))
         n_plant = min(int(cfg.get("plant_modes", 12)), se.n_dof)
         # modal form: shell drilling rotations of the boundary have no inertia (singular
         # physical M); n_plant modes + the static residual of the others (exact DC gain)
@@ -676,6 +690,70 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         result["fe_fn_hz_updated"] = (fe_hz if fe_hz.min() > 1e-3 * fe_hz.max()
                                       else modal_analysis(model, n_cmp).fn_hz)
     return result, ds
+
+
+def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
+    """Plant of piezo electrodes on any shell structure: the first actuator's voltage in,
+    the sensors' charge or voltage and the sensor node's displacement (``"tip"``) out,
+    on the super element with the electrodes' static shapes
+    (:func:`mvtk.reduction.with_electrodes`)."""
+    import dataclasses
+
+    import xarray as xr
+
+    from ..control import piezo_plant
+    from ..errors import MvtkError
+    from ..fe import modal_emcc, piezo_coupling, static_solve
+    from ..reduction import with_electrodes
+
+    try:
+        cp = piezo_coupling(model)
+        acts = [cp.names[i] for i in cp.index(ctl["actuators"])]
+        sens = [cp.names[i] for i in cp.index(ctl["sensors"])]
+    except MvtkError as err:
+        raise ConfigError(f"control.actuators/sensors: {err}") from err
+    if model_damping is not None:
+        damp = {"alpha": float(model_damping["alpha"]), "beta": float(model_damping["beta"])}
+        damp_text = "Rayleigh pair of [damping]"
+    elif ctl.get("zeta") is not None:
+        damp = {"modal_damping": float(ctl["zeta"])}
+        damp_text = f"modal damping ratio {float(ctl['zeta']):g} (control.zeta)"
+    else:
+        raise ConfigError("control.zeta: the piezo plant needs a damping: give [damping] "
+                          "or control.zeta (modal damping ratio)")
+    se_e, _ = with_electrodes(se, cp)
+    tip = named[ctl["sensor_node"]]
+    n_plant = min(int(cfg.get("plant_modes", 12)), se_e.n_dof)
+    plant = piezo_plant(se_e, cp, acts[:1], sens, sensing=ctl.get("sensing", "charge"),
+                        points=[(tip, "uz")], form="modal", n_modes=n_plant,
+                        static_correction=True, **damp)
+    plant = dataclasses.replace(plant, outputs=plant.outputs[:-1] + ("tip",))
+    i_a = cp.names.index(acts[0])
+    w_full = float(model.expand(static_solve(model, cp.B[:, i_a]))[tip, 2])
+    emcc = [r for r in modal_emcc(model, cp, n_modes=min(6, model.n_dof - 1),
+                                  electrodes=acts[:1] + [n for n in sens if n != acts[0]])]
+    act = {"piezo": True, "name": acts[0], "actuators": acts, "sensors": sens,
+           "sensing": ctl.get("sensing", "charge"), "damping": damp_text,
+           "capacitance_F": {n: float(cp.C[cp.names.index(n)]) for n in acts + sens},
+           "tip_per_volt_full_m": w_full,
+           "tip_per_volt_plant_m": float(plant.to_state_space().dc_gain()[-1, 0]),
+           "sensor_per_volt_plant": float(plant.to_state_space().dc_gain()[0, 0]),
+           "sensor_unit": plant.output_units[0],
+           "plant_modes": n_plant, "plant_fn_max_hz": float(np.max(plant.meta["fn_hz"])),
+           "emcc": emcc, "moment_per_volt": float("nan")}
+    coords = list(plant.coords)
+    ds = xr.Dataset({
+        k: (("coord", "coord2"), getattr(plant, k)) for k in ("M", "C", "K")
+    } | {
+        "B": (("coord", "input"), plant.B),
+        "Cq": (("output", "coord"), plant.Cq),
+        "Cv": (("output", "coord"), plant.Cv),
+        "D": (("output", "input"), plant.D),
+    }, coords={"coord": coords, "coord2": coords, "input": list(plant.inputs),
+               "output": list(plant.outputs)},
+        attrs={"moment_per_volt": float("nan"),
+               "output_units": "|".join(plant.output_units)})
+    return act, ds
 
 
 # ---------------------------------------------------------------------------- control
@@ -711,9 +789,19 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         pa["Cv"].values, inputs=[str(v) for v in pa["input"].values],
         outputs=[str(v) for v in pa["output"].values],
         coords=[str(v) for v in pa["coord"].values], input_units=["V"],
-        output_units=["m"], D=pa["D"].values,
+        output_units=str(pa.attrs.get("output_units", "m")).split("|"),
+        D=pa["D"].values,
     )
-    x0 = release_state(plant, 1, "tip", float(cfg["initial_tip_displacement_m"]))
+    mode = int(cfg.get("release_mode", 1))
+    if mode != 1:
+        # the released mode's frequency, from the plant (the first mode's is given)
+        om = closed_loop_modes(plant)
+        fosc = np.sort(om.fn_hz[om.eigenvalues.imag > 0])
+        if mode > fosc.size:
+            raise ConfigError(f"control.release_mode: {mode} exceeds the plant's "
+                              f"{fosc.size} modes")
+        fn1_hz = float(fosc[mode - 1])
+    x0 = release_state(plant, mode, "tip", float(cfg["initial_tip_displacement_m"]))
     t_end, fs = float(cfg["t_end_s"]), float(cfg["fs_out"])
     if fs <= 2.4 * fn1_hz:
         raise ConfigError(f"control.fs_out = {fs:g} Hz cannot resolve the first mode "
@@ -763,10 +851,12 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         if ctrl is None:
             om = closed_loop_modes(plant)
             osc = om.eigenvalues.imag > 0
-            zeta_cl, fn_cl = float(om.zeta[osc][0]), float(om.fn_hz[osc][0])
+            order = np.argsort(om.fn_hz[osc])
+            zeta_cl = float(om.zeta[osc][order][mode - 1])
+            fn_cl = float(om.fn_hz[osc][order][mode - 1])
         elif kind_linear(ctrl):
             # small-signal closed-loop mode 1 (the actuator limit is not active in it)
-            ad = added_damping(plant, dataclasses.replace(ctrl, u_max=None), 1)
+            ad = added_damping(plant, dataclasses.replace(ctrl, u_max=None), mode)
             zeta_cl, fn_cl = ad["zeta_closed"], ad["fn_hz_closed"]
         f, a = _amplitude_spectrum(y, fs)
         rows.append({"controller": name,
@@ -789,6 +879,7 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         coords={"run": list(series), "time": t, "frequency": f},
     )
     return {"metrics": rows, "settle_band": band, "fs_out": fs, "t_end_s": t_end,
+            "fn1_hz": float(fn1_hz),
             "actuator_limit_v": limit_v, "moment_per_volt": m_per_v,
             "methods": methods, "control_rate_hz": rates,
             "switching_peak": switching_peak,

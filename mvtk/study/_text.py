@@ -6,6 +6,7 @@ import codecs
 import tomllib
 from pathlib import Path
 
+from .._atomic import special_file
 from ..errors import ConfigError
 
 __all__ = ["read_text", "read_toml"]
@@ -26,6 +27,9 @@ def read_text(path: str | Path, what: str = "file") -> str:
         Other operating-system errors (permissions, symlink loops); ``filename`` is set.
     """
     p = Path(path)
+    kind = special_file(p)
+    if kind is not None:
+        raise ConfigError(f"{what} {str(p)!r} is {kind}, expected a TOML file")
     try:
         data = p.read_bytes()
     except FileNotFoundError:

@@ -837,9 +837,9 @@ class UpdateResult:
 
     def write_toml(self, path: str | Path) -> Path:
         """Write the updated structure description to ``path`` as TOML."""
-        path = Path(path)
-        path.write_text(self.to_toml(), encoding="utf-8")
-        return path
+        from .._atomic import write_text
+
+        return write_text(Path(path), self.to_toml())
 
     def to_dict(self) -> dict:
         """JSON-serialisable summary (tables as lists of records, no model)."""

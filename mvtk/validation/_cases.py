@@ -311,6 +311,77 @@ def _smits_bimorph():
     return [u[model.dof_index(model.node_set("tip")[0], "uz")]]
 
 
+def _piezo_strip(L, b, nx, ny):
+    xs, ys = np.linspace(0, L, nx + 1), np.linspace(0, b, ny + 1)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    nodes = np.column_stack([X.ravel(), Y.ravel(), np.zeros(X.size)])
+    q = np.array([[i * (ny + 1) + j, (i + 1) * (ny + 1) + j, (i + 1) * (ny + 1) + j + 1,
+                   i * (ny + 1) + j + 1] for i in range(nx) for j in range(ny)])
+    return nodes, q
+
+
+def _smits_parallel_shell():
+    from mvtk.fe import (
+        Electrode,
+        Laminate,
+        PiezoMaterial,
+        Ply,
+        ShellPiezoPatch,
+        ShellSet,
+        assemble_model,
+        piezo_coupling,
+        static_solve,
+    )
+
+    pz = PiezoMaterial("PZT nu=0", 66.667e9, 0.0, 7800.0, -210e-12)
+    L, b, t = 0.04, 0.005, 0.25e-3
+    nodes, q = _piezo_strip(L, b, 40, 2)
+    lam = Laminate((Ply(pz, t), Ply(pz, t)))
+    m = assemble_model(nodes, [ShellSet(q, lam)], supports={"c": "clamped"},
+                       node_sets={"c": np.flatnonzero(nodes[:, 0] == 0)})
+    cp = piezo_coupling(m, [ShellPiezoPatch("bim", q, lam, electrodes=(
+        Electrode("V", (0, 1), (-1, 1)),))])
+    tip = np.flatnonzero(np.isclose(nodes[:, 0], L))
+    w = m.expand(static_solve(m, cp.B[:, 0]))[tip, 2].mean()
+    f = np.zeros(m.n_dof)
+    f[[m.dof_index(i, "uz") for i in tip]] = 1.0 / len(tip)
+    g = m.expand(static_solve(m, f))[tip, 2].mean()
+    return [w, w / g]
+
+
+def _ieee176_k31():
+    from mvtk.fe import (
+        Laminate,
+        PiezoMaterial,
+        Ply,
+        ShellPiezoPatch,
+        ShellSet,
+        assemble_model,
+        modal_emcc,
+        piezo_coupling,
+    )
+
+    s11, s12 = 16.5e-12, -4.78e-12
+    pz = PiezoMaterial("PZT-5H", 1 / s11, -s12 / s11, 7500.0, -274e-12,
+                       eps33=3400 * 8.8541878128e-12)
+    nodes, q = _piezo_strip(0.04, 0.002, 80, 1)
+    lam = Laminate((Ply(pz, 0.5e-3),))
+    m = assemble_model(nodes, [ShellSet(q, lam)], supports={"all": ["uz", "rx", "ry"]},
+                       node_sets={"all": np.arange(len(nodes))})
+    rows = modal_emcc(m, piezo_coupling(m, [ShellPiezoPatch("p", q, lam)]), n_modes=8)
+    ext = max((r for r in rows if np.isfinite(r["k2"])), key=lambda r: r["k2"])
+    return [ext["f_oc_hz"] / ext["f_sc_hz"]]
+
+
+def _ieee176_k31_reference():
+    from scipy.optimize import brentq
+
+    k2 = (274e-12) ** 2 / (16.5e-12 * 3400 * 8.8541878128e-12)
+    xa = brentq(lambda x: (1 - k2) * np.cos(x) * x + k2 * np.sin(x), np.pi / 2 + 1e-9,
+                np.pi - 1e-9)
+    return (xa / (np.pi / 2),)
+
+
 def _navier_cross_ply_omega(E1, E2, G12, G13, G23, nu12, rho, a, h, ks=5.0 / 6.0):
     """Lowest omega (rad/s) of mode (1, 1) of a simply supported square 0/90/90/0 plate
     (equal plies) in first-order shear deformation theory: the 3 x 3 Navier eigenproblem
@@ -632,6 +703,24 @@ def validation_cases() -> tuple[ValidationCase, ...]:
             "closed form: delta = 3/2 d31 V L^2 / h^2 (J. G. Smits, S. I. Dalke, T. K. "
             "Cooney, Sensors and Actuators A 28 (1991) 41-61)", ("tip deflection (m)",),
             (1.5 * 210e-12 * 10.0 * 0.03**2 / (0.5e-3) ** 2,), 1e-9, _smits_bimorph, "m"),
+        ValidationCase(
+            "fe.smits_bimorph_shell", "fe",
+            "parallel PZT bimorph 40 x 5 x 0.5 mm (nu = 0), 40 x 2 MITC4 shells with the "
+            "electromechanical coupling: tip deflection and blocked force per volt",
+            "closed form: delta = 3 d31 L^2 / h^2, F = 3/4 E d31 b h / L (J. G. Smits, "
+            "S. I. Dalke, T. K. Cooney, Sensors and Actuators A 28 (1991) 41-61)",
+            ("tip deflection per volt (m/V)", "blocked force per volt (N/V)"),
+            (3 * 210e-12 * 0.04**2 / (0.5e-3) ** 2,
+             0.75 * 66.667e9 * 210e-12 * 0.005 * 0.5e-3 / 0.04), 1e-2,
+            _smits_parallel_shell, ""),
+        ValidationCase(
+            "fe.ieee176_k31_bar", "fe",
+            "free PZT-5H bar 40 x 2 x 0.5 mm with full electrodes, 80 MITC4 shells: "
+            "open-circuit / short-circuit frequency of the length-extensional mode",
+            "IEEE Standard on Piezoelectricity, ANSI/IEEE Std 176-1987: the anti-resonance of "
+            "the k31 bar solves (1 - k31^2) + k31^2 tan(x)/x = 0, x = omega L / (2 c); PZT-5H "
+            "s11E = 16.5e-12 m^2/N, d31 = -274 pm/V, eps33T = 3400 eps0",
+            ("f_oc / f_sc",), _ieee176_k31_reference(), 1e-3, _ieee176_k31, ""),
         ValidationCase(
             "fe.reddy_cross_ply", "fe",
             "MITC4, simply supported 0/90/90/0 plate, a/h = 10, E1/E2 = 40, 20 x 20: "

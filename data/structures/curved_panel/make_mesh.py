@@ -13,8 +13,12 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 
 
-def generate(out: Path, geo: Path = HERE / "curved_panel.geo") -> Path:
-    """Mesh ``geo`` with Gmsh and write it to ``out`` as Gmsh 2.2 ASCII."""
+def generate(out: Path, geo: Path = HERE / "curved_panel.geo", order: int = 1) -> Path:
+    """Mesh ``geo`` with Gmsh and write it to ``out`` as Gmsh 2.2 ASCII.
+
+    ``order = 2`` writes complete second-order elements (nine-node quads, three-node
+    lines) on the same element grid: ``curved_panel_quad9.msh``.
+    """
     import gmsh
 
     # no user gmshrc (the same mesh everywhere); keep Python's Ctrl-C handling
@@ -25,6 +29,9 @@ def generate(out: Path, geo: Path = HERE / "curved_panel.geo") -> Path:
         gmsh.option.setNumber("Mesh.MshFileVersion", 2.2)
         gmsh.option.setNumber("Mesh.Binary", 0)
         gmsh.model.mesh.generate(2)
+        if order != 1:
+            gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+            gmsh.model.mesh.setOrder(order)
         gmsh.write(str(out))
     finally:
         gmsh.finalize()
@@ -38,3 +45,4 @@ if __name__ == "__main__":
         sys.exit(f"make_mesh.py needs the Gmsh Python API ({err}); install it with: "
                  "pip install gmsh")
     print(f"wrote {generate(HERE / 'curved_panel.msh')}")
+    print(f"wrote {generate(HERE / 'curved_panel_quad9.msh', order=2)}")

@@ -1,0 +1,65 @@
+"""The curved-panel study (data/curved_panel/study.toml): piezo patches on an imported
+mesh through the super element into the controllers, from the study file."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from mvtk.errors import ConfigError
+from mvtk.study import load_study, run
+
+STUDY = Path(__file__).resolve().parents[2] / "data" / "curved_panel" / "study.toml"
+
+
+@pytest.mark.slow
+def test_curved_panel_study_damps_the_patch_mode(tmp_path):
+    res = run(STUDY, tmp_path, use_cache=False, progress=False, parallel=False)
+    act = res.results["reduction"]["actuator"]
+    assert act["piezo"] and act["name"] == "act" and act["sensors"] == ["sen"]
+    # the plant's DC gain from the SE equals the full model's (electrodes' static shapes)
+    assert act["tip_per_volt_plant_m"] == pytest.approx(act["tip_per_volt_full_m"], rel=1e-6)
+    rows = {r["controller"]: r for r in res.results["control"]["metrics"]}
+    open_, ppf, srf = rows["open loop"], rows["PPF"], rows["SRF"]
+    assert open_["fn_mode1_hz"] == pytest.approx(126.5, abs=0.3)  # the released mode 2
+    assert ppf["stable"] and srf["stable"]
+    assert ppf["zeta_mode1"] > 2 * open_["zeta_mode1"]
+    assert srf["zeta_mode1"] > open_["zeta_mode1"]
+    assert ppf["voltage_within_limit"] and ppf["settling_time_s"] < open_["settling_time_s"]
+    em = pd.read_csv(tmp_path / "tables" / "piezo_emcc.csv")
+    assert set(em["electrode"]) == {"act", "sen"} and (em["f_oc_hz"] >= em["f_sc_hz"]).all()
+
+
+def test_piezo_control_keys_are_checked(tmp_path):
+    text = STUDY.read_text().replace('sensors = ["sen"]\n', "")
+    text = text.replace('file = "../structures', f'file = "{STUDY.parent.parent}/structures')
+    bad = tmp_path / "study.toml"
+    bad.write_text(text)
+    with pytest.raises(ConfigError, match="control.sensors"):
+        load_study(bad)
+
+
+def test_init_template_of_a_mesh_offers_piezo_patches(tmp_path):
+    """The structure TOML `mvtk init` writes around a mesh carries a commented patch
+    template; uncommented, it builds electrodes on the mesh."""
+    import shutil
+
+    from mvtk.fe import build_model, piezo_coupling
+    from mvtk.study._init import mesh_structure_toml
+
+    src = STUDY.parent.parent / "structures" / "curved_panel" / "curved_panel.msh"
+    shutil.copy(src, tmp_path / "panel.msh")
+    text = mesh_structure_toml(tmp_path / "panel.msh", tmp_path)
+    lines = []
+    for line in text.splitlines():
+        if line.startswith("# ") and any(k in line for k in (
+                "[materials.pic151]", "E = 66.667e9", "nu = 0.34", "rho = 7800", "d31 =",
+                "eps33 =", "[[patches]]", 'name = "pzt"', "element_set =", "layers = [{",
+                'side = "top"')):
+            line = line[2:]
+        lines.append(line)
+    (tmp_path / "structure.toml").write_text("\n".join(lines))
+    cp = piezo_coupling(build_model(tmp_path / "structure.toml"))
+    assert cp.names == ("pzt",) and cp.C[0] > 0
