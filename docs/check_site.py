@@ -5,7 +5,9 @@ Usage: ``python docs/check_site.py docs/_build/html`` (run by ``make docs``).
 - every relative ``href``/``src`` in every HTML page points at an existing file, and
   every ``#fragment`` at an ``id`` (or ``name``) in the target page;
 - every public name (``__all__``) of every documented subpackage is in the site's
-  ``objects.inv`` (documented in place, or re-exported from where it is documented).
+  ``objects.inv`` (documented in place, or re-exported from where it is documented);
+- the install, getting-started, help and overview pages exist, the landing page shows
+  its pictures and the gallery its figures.
 
 Exits 1 with one line per problem, 0 when the site is clean. External links are not
 followed (the build machines have no network); they are listed with ``--external``.
@@ -129,6 +131,40 @@ def screenshot(site: Path, png: Path) -> Path | None:
     return png
 
 
+#: pages a reader looks for first; and the least number of pictures the landing page
+#: and the gallery must show (FRF, decay, mode shapes, controller responses, MAC, ...)
+REQUIRED_PAGES = ("install.html", "getting_started.html", "help.html",
+                  "guide/overview.html")
+MIN_LANDING_IMAGES = 2
+MIN_GALLERY_IMAGES = 6
+
+
+def _images(path: Path) -> int:
+    return sum(1 for link in _parse(path).links
+               if link.startswith("data:image") or "_images/" in link)
+
+
+def check_pictures(root: Path) -> list[str]:
+    """Missing reader pages, and a landing page or gallery without its figures (a
+    gallery notebook that found its data draws at least one figure)."""
+    problems = [f"{p}: page missing" for p in REQUIRED_PAGES if not (root / p).is_file()]
+    n = _images(root / "index.html")
+    if n < MIN_LANDING_IMAGES:
+        problems.append(f"index.html: {n} pictures, expected at least {MIN_LANDING_IMAGES}")
+    total = 0
+    for page in sorted((root / "gallery").glob("*.html")):
+        k = _images(page)
+        total += k
+        text = page.read_text(encoding="utf-8", errors="replace")
+        skipped = "NOT FOUND" in text or "data: None" in text
+        if k == 0 and not skipped:
+            problems.append(f"gallery/{page.name}: no figure")
+    if total < MIN_GALLERY_IMAGES:
+        problems.append(f"gallery: {total} figures in all, expected at least "
+                        f"{MIN_GALLERY_IMAGES}")
+    return problems
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("site", type=Path, help="built HTML folder (docs/_build/html)")
@@ -142,6 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     problems, external = check_links(args.site)
     problems += check_api(args.site)
+    problems += check_pictures(args.site)
     if args.external:
         print("\n".join(external))
     for p in problems:

@@ -27,8 +27,8 @@ table.mvtk th, table.mvtk td { border: 1px solid #bbc; padding: 0.25em 0.45em;
 table.mvtk th { background: #eef; vertical-align: bottom; }
 table.mvtk th.text { text-align: left; }
 table.mvtk td { white-space: nowrap; }
-table.mvtk td.text { text-align: left; white-space: normal; overflow-wrap: anywhere;
-             min-width: 3em; max-width: 32em; }
+table.mvtk td.text { text-align: left; white-space: normal; overflow-wrap: break-word;
+             hyphens: auto; min-width: 3em; max-width: 32em; }
 table.mvtk td.pass { background: #d7f5d7; color: #0a5a0a; font-weight: bold;
              text-align: center; }
 table.mvtk td.fail { background: #fbd5d5; color: #8a0b0b; font-weight: bold;

@@ -136,3 +136,26 @@ def test_validation_page_shows_a_failing_case():
     assert "1 fail" in page
     table = run_validation(cases)
     assert mvtk_docs.failing_cases(table) == ["fe.nafems_fv2"]
+
+
+def test_site_checker_counts_the_pictures(tmp_path):
+    check_site = importlib.import_module("check_site")
+    site = tmp_path / "site"
+    (site / "gallery").mkdir(parents=True)
+    (site / "guide").mkdir()
+    for page in check_site.REQUIRED_PAGES:
+        (site / page).write_text("<html></html>", encoding="utf-8")
+    img = '<img src="_images/a.png">'
+    (site / "index.html").write_text("<p>no pictures</p>", encoding="utf-8")
+    (site / "gallery" / "a.html").write_text("<p>text only</p>", encoding="utf-8")
+    (site / "gallery" / "b.html").write_text("<p>data file NOT FOUND - skipping</p>",
+                                             encoding="utf-8")
+    problems = check_site.check_pictures(site)
+    assert any("index.html: 0 pictures" in p for p in problems)
+    assert any("gallery/a.html: no figure" in p for p in problems)
+    assert not any("b.html" in p for p in problems)   # no data here: nothing to draw
+    (site / "index.html").write_text(img * 2, encoding="utf-8")
+    (site / "gallery" / "a.html").write_text(img * 6, encoding="utf-8")
+    assert check_site.check_pictures(site) == []
+    (site / "help.html").unlink()
+    assert check_site.check_pictures(site) == ["help.html: page missing"]

@@ -101,6 +101,13 @@ def mac(a: Any, b: Any | None = None) -> xr.DataArray:
     xarray.DataArray
         dims ``("mode_a", "mode_b")``, values in [0, 1] (0 for an all-zero shape), with
         the ``fn_hz`` of each set as coordinates when present.
+
+    Examples
+    --------
+    >>> a = np.array([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]])   # orthogonal shapes
+    >>> np.round(mac(a, -2 * a).values, 3)      # scale and sign do not matter
+    array([[1., 0.],
+           [0., 1.]])
     """
     A, B = _aligned(a, a if b is None else b)
     val = mac_columns(A.values.T, B.values.T)

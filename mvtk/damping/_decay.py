@@ -420,6 +420,14 @@ def log_decrement(
     ------
     mvtk.errors.ParameterError
         When no channel at all can be fitted (the message gives each reason).
+
+    Examples
+    --------
+    >>> from mvtk import testing
+    >>> x = testing.sdof_free_decay(12.0, 0.005, 256.0, 10.0)   # 12 Hz, zeta 0.5 %
+    >>> res = log_decrement(x, 12.0)
+    >>> np.round(res.zeta, 5)
+    array([0.005])
     """
     if not 0 < threshold < 1:
         raise ParameterError(f"threshold must be in (0, 1), got {threshold!r}")

@@ -159,6 +159,16 @@ def rayleigh_fit(
     I. Chowdhury, S. P. Dasgupta, "Computation of Rayleigh damping coefficients for large
     systems", Electronic Journal of Geotechnical Engineering 8 (2003), paper 0318.
     J. Song, Q. Su, Shock and Vibration (2017) 2046345.
+
+    Examples
+    --------
+    Two modes, 10 Hz at 1 % and 40 Hz at 2 %: zeta = alpha / (2 w) + beta w / 2 holds
+    at both.
+
+    >>> fit = rayleigh_fit([10.0, 40.0], [0.01, 0.02], "two_mode")
+    >>> w = 2 * np.pi * np.array([10.0, 40.0])
+    >>> np.round(fit.alpha / (2 * w) + fit.beta * w / 2, 6)
+    array([0.01, 0.02])
     """
     fn = np.atleast_1d(np.asarray(fn_hz, dtype=float))
     if fn.ndim != 1 or fn.size < 2:

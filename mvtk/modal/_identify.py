@@ -351,6 +351,17 @@ def identify(
     ------
     ParameterError
         Bad band or orders, or no pole near a requested frequency.
+
+    Examples
+    --------
+    The exact receptance of a 2-mass chain (modes at 31.105 and 81.434 Hz):
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0, 120, 0.25),
+    ...                     [0, 1], [0], frf_type="receptance")
+    >>> np.round(identify(h, 2, 110).fn_hz, 3)
+    array([31.105, 81.434])
     """
     stab = stability or StabilityCriteria()
     clus = clustering or ClusterCriteria()

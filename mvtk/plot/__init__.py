@@ -1,5 +1,6 @@
 """Figures (the only subpackage importing matplotlib, lazily, with figures built off pyplot)."""
 
+from ._animation import mesh_edges, mode_animation_html
 from ._correlation import plot_mac, plot_paired_shapes, plot_test_on_mesh
 from ._figures import (
     figure_to_png,
@@ -28,4 +29,6 @@ __all__ = [
     "plot_frf_synthesis",
     "plot_automac",
     "plot_fn_histogram",
+    "mesh_edges",
+    "mode_animation_html",
 ]

@@ -88,15 +88,26 @@ def plot_mac(mac: Any, *, title: str = "MAC", annotate: bool = True):
     return fig
 
 
-def _wire(ax, geometry, values=None, scale=0.0, color="k", lw=1.0, label=None):
-    """Wireframe of a test geometry in the x-y view with optional z displacement colour."""
+def _wire(ax, geometry, values=None, scale=0.0, color="k", lw=1.0, label=None,
+          triangulate=False):
+    """Wireframe of a test geometry in the x-y view with optional z displacement colour.
+
+    With ``triangulate`` a geometry without trace lines is drawn as the triangulation of
+    its nodes (:func:`mvtk.plot.mesh_edges`, dashed) so the test grid shows over a mesh.
+    """
     from matplotlib.collections import LineCollection
 
     xyz = geometry.xyz * 1e3
     segs = geometry.edges()
+    style = "solid"
+    if not len(segs) and triangulate and len(xyz) >= 3:
+        from ._animation import mesh_edges
+
+        segs, style = mesh_edges(geometry.xyz), "dashed"
+        label = f"{label} (triangulated: no trace lines)" if label else label
     if len(segs):
         ax.add_collection(LineCollection(xyz[segs][:, :, :2], colors=color, linewidths=lw,
-                                         label=label))
+                                         linestyles=style, label=label))
     if values is not None:
         sc = ax.scatter(xyz[:, 0], xyz[:, 1], c=values, cmap="coolwarm", vmin=-1, vmax=1,
                         s=40, edgecolors="k", linewidths=0.5, zorder=3)
@@ -283,7 +294,7 @@ def plot_test_on_mesh(model: Any, geometry: Any, *, mapping: Any = None):
                  pw, ph)
     ax.add_collection(LineCollection(_mesh_segments(model, xy), colors="0.8", linewidths=0.5),
                       autolim=False)
-    _wire(ax, geometry, color="tab:red", lw=1.4, label="test wireframe")
+    _wire(ax, geometry, color="tab:red", lw=1.4, label="test wireframe", triangulate=True)
     if geometry.sensors:
         v = geometry.sensor_vectors()
         p = np.array([geometry.xyz[geometry.row(s.node)] for s in geometry.sensors]) * 1e3

@@ -233,8 +233,9 @@ def plot_frf(
     ylabel: str = "|H|",
     title: str = "",
     markers: bool = False,
+    coherence: Sequence[float] | None = None,
 ):
-    """FRF magnitude (log) with half-power bands marked.
+    """FRF magnitude (log) with half-power bands marked, and its coherence below.
 
     Parameters
     ----------
@@ -249,27 +250,70 @@ def plot_frf(
         Plotted frequency range in Hz.
     markers : bool
         Mark every frequency line (shows the resolution across a half-power band).
+    coherence : array, shape (n,), optional
+        Ordinary coherence of the FRF estimate (0..1), drawn in a panel below: where it
+        drops, the FRF is noise or leakage, not structure.
+
+    Examples
+    --------
+    >>> f = np.linspace(1.0, 40.0, 400)
+    >>> H = 1 / (13.0**2 - f**2 + 0.3j * f)
+    >>> fig = plot_frf(f, H, ylabel="|H| [m/N]", coherence=np.full(400, 0.99))
+    >>> len(fig.axes)
+    2
     """
     f = _vec("f_hz", f_hz)
     h = np.abs(_vec("H", H))
     if h.shape != f.shape:
         raise DimensionError(f"H has {h.size} values but f_hz has {f.size}")
-    f, (h,) = _crop(f, [h], f_range)
+    coh = None
+    if coherence is not None:
+        coh = _vec("coherence", coherence)
+        if coh.shape != f.shape:
+            raise DimensionError(f"coherence has {coh.size} values but f_hz has {f.size}")
+        f, (h, coh) = _crop(f, [h, coh], f_range)
+    else:
+        f, (h,) = _crop(f, [h], f_range)
+    f_full = f
     if not markers:
         f, h = minmax_decimate(f, h)
-    fig = _figure(title=bool(title))
-    ax = fig.add_subplot()
+    if coh is None:
+        fig = _figure(title=bool(title))
+        ax = fig.add_subplot()
+    else:
+        fig = _figure(height=5.2, title=bool(title))
+        gs = fig.add_gridspec(2, 1, height_ratios=[2.6, 1.0],
+                              hspace=0.12)
+        ax = fig.add_subplot(gs[0])
+        axc = fig.add_subplot(gs[1], sharex=ax)
+        fc, cc = (f_full, coh) if markers else minmax_decimate(f_full, coh)
+        axc.plot(fc, cc, lw=0.9, color="C2", marker="o" if markers else None, ms=2)
+        axc.set_ylim(min(0.5, float(np.nanmin(coh)) - 0.02) if np.isfinite(coh).any()
+                     else 0.0, 1.02)
+        axc.set_ylabel("coherence")
+        axc.set_xlabel("frequency [Hz]")
+        axc.grid(True, alpha=0.3)
     ax.semilogy(f, h, lw=1.0, color="C0", label="FRF", marker="o" if markers else None,
                 ms=3)
     _plain_log_axis(ax.yaxis)
-    for i, (lo, hi, fn) in enumerate(bands):
+    x0, x1 = (f_range if f_range is not None else (float(f[0]), float(f[-1])))
+    last, level = -np.inf, 0
+    for i, (lo, hi, fn) in enumerate(sorted(bands, key=lambda b: b[2])):
         ax.axvspan(lo, hi, color="C3", alpha=0.25, label="half-power band" if i == 0 else None)
         ax.axvline(fn, color="C3", lw=0.8, ls="--")
-        ax.annotate(f"{fn:.3f} Hz", (fn, 1.0), xycoords=("data", "axes fraction"),
-                    ha="left", va="top", fontsize=8, color="C3")
+        # labels closer than 14 % of the axis width are staggered downwards
+        pos = (fn - x0) / (x1 - x0) if x1 > x0 else 0.0
+        level = (level + 1) % 3 if pos - last < 0.14 else 0
+        last = pos
+        ax.annotate(f"{fn:.3f} Hz", (fn, 1.0 - 0.08 * level),
+                    xycoords=("data", "axes fraction"), ha="left", va="top", fontsize=9,
+                    color="C3")
     if f_range is not None:
         ax.set_xlim(*f_range)
-    ax.set_xlabel("frequency [Hz]")
+    if coh is None:
+        ax.set_xlabel("frequency [Hz]")
+    else:
+        ax.tick_params(labelbottom=False)
     ax.set_ylabel(ylabel)
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="lower left", fontsize=8)

@@ -257,10 +257,12 @@ class FigureRenderer:
 
     Examples
     --------
-    >>> r = FigureRenderer()                        # doctest: +SKIP
-    >>> job = r.submit(fig, "auto")                 # queued
+    >>> from mvtk.plot import plot_frf
+    >>> r = FigureRenderer(workers=0)               # render in this process
+    >>> job = r.submit(plot_frf([1.0, 2.0, 3.0], [1.0, 3.0, 1.0]), "png")
     >>> r.wait()                                    # every job rendered
-    >>> job.mime, len(job.data)
+    >>> job.mime, job.data[:4]
+    ('image/png', b'\x89PNG')
     """
 
     def __init__(self, workers: int | None = None) -> None:

@@ -1,4 +1,8 @@
-"""The study report: paper-shaped tables, figures, pass/fail checks, provenance."""
+"""The study report: tables, figures, pass/fail checks and provenance of a study run.
+
+Every sentence is built from the study's own content; published values appear only
+where the study declares them in ``[references]``.
+"""
 
 from __future__ import annotations
 
@@ -11,7 +15,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from ..report import Report, collect_provenance
+from .._format import parameter_unit
+from ..report import Report, collect_provenance, display_checks
+from ..report._provenance import relative_path
 from ..validation import Check, check_table, frequency_table
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -22,6 +28,37 @@ __all__ = ["build_report", "study_checks"]
 
 def _ref(res: StudyResult, key: str, default=None):
     return (res.study.config.get("references") or {}).get(key, default)
+
+
+def _has_refs(res: StudyResult, *keys: str) -> bool:
+    """True when the study's ``[references]`` give every one of ``keys``."""
+    refs = res.study.config.get("references") or {}
+    return bool(keys) and all(refs.get(k) is not None for k in keys)
+
+
+def _refs_name(res: StudyResult) -> str:
+    """How the text names the study's references: their ``source``, else "the references"."""
+    return str(_ref(res, "source") or "the references")
+
+
+def _title(base: str, res: StudyResult, tables: str, *keys: str) -> str:
+    """``base``, with `` (paper Tables ...)`` only when the study gives those references."""
+    return f"{base} (reference {tables})" if _has_refs(res, *keys) else base
+
+
+def _list_modes(modes: list[int]) -> str:
+    """``[1, 2]`` -> "modes 1-2", ``[3]`` -> "mode 3", ``[1, 3, 4]`` -> "modes 1, 3, 4"."""
+    if len(modes) == 1:
+        return f"mode {modes[0]}"
+    if modes == list(range(modes[0], modes[-1] + 1)):
+        return f"modes {modes[0]}-{modes[-1]}"
+    return "modes " + ", ".join(map(str, modes))
+
+
+def _not_configured(res: StudyResult, stage: str) -> bool:
+    """True when the study file does not ask for ``stage`` (its section is left out)."""
+    return stage not in res.results and str(
+        res.unavailable.get(stage, "")).startswith("not configured")
 
 
 def _stage_missing(sec, res: StudyResult, stage: str) -> bool:
@@ -73,7 +110,7 @@ def study_checks(res: StudyResult) -> list[Check]:
                 checks.append(Check(f"identified zeta{i + 1} at {fn:.1f} Hz vs SYNTHETIC truth",
                                     z, truth_pair[0] / (2 * w) + truth_pair[1] * w / 2,
                                     tol["identified_zeta_rel"], "",
-                                    source="data/make_smart_beam_data.py"))
+                                    source="study [truth] (simulated specimen)"))
                 confirm.setdefault(i, []).append(checks[-1])
     env = dmp.get("envelope")
     zref = _ref(res, "zeta", [])
@@ -109,7 +146,7 @@ def study_checks(res: StudyResult) -> list[Check]:
             if path in truth:
                 checks.append(Check(f"updated {path} vs SYNTHETIC truth", value,
                                     float(truth[path]), tol["truth_param_rel"], "",
-                                    source="data/make_smart_beam_data.py"))
+                                    source="study [truth] (simulated specimen)"))
     unc = res.results.get("uncertainty")
     if unc and unc["statistics"]:
         s1 = unc["statistics"][0]
@@ -140,7 +177,7 @@ def study_checks(res: StudyResult) -> list[Check]:
                                     tol["ppf_settling_s"], 0.0, "s", kind="upper",
                                     source="study tolerance"))
             if "peak_voltage_V" in row:
-                checks.append(Check(f"{name} peak voltage within the PIC 151 limit",
+                checks.append(Check(f"{name} peak voltage within the actuator limit",
                                     row["peak_voltage_V"], ctl["actuator_limit_v"], 0.0, "V",
                                     kind="upper", source="study control.actuator_limit_v"))
             stable = row.get("stable")
@@ -372,9 +409,14 @@ def _truth_rayleigh(res: StudyResult) -> tuple[float, float] | None:
 def _section_run(rep: Report, res: StudyResult) -> None:
     sec = rep.section("Study and run summary")
     if res.study.synthetic:
-        sec.note("The measurement data of this study are SYNTHETIC: simulated by "
-                 "data/make_smart_beam_data.py from a 'truth' beam, not measured. The "
-                 "paper's values are shown next to mvtk's own numbers for comparison.")
+        parts = ["The measurement data of this study are SYNTHETIC (the study file says "
+                 "so: [study] synthetic = true): simulated, not measured."]
+        if res.study.config.get("truth"):
+            parts.append("The simulated specimen's own values ([truth]) are shown next to "
+                         "mvtk's numbers and checked.")
+        if res.study.config.get("references"):
+            parts.append(f"The values of {_refs_name(res)} are shown for comparison.")
+        sec.note(" ".join(parts))
     sec.text(f"Study: {res.study.name} ({res.study.path.name}).")
     df = res.to_dataframe()
     df = df[df["stage"] != "report"]
@@ -383,6 +425,8 @@ def _section_run(rep: Report, res: StudyResult) -> None:
 
 
 def _section_measurements(rep: Report, res: StudyResult) -> None:
+    if _not_configured(res, "ingest"):
+        return
     sec = rep.section("Measurements")
     if _stage_missing(sec, res, "ingest"):
         return
@@ -393,7 +437,9 @@ def _section_measurements(rep: Report, res: StudyResult) -> None:
 def _section_damping(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_decay, plot_frf
 
-    sec = rep.section("Damping identification (paper Table 3)")
+    if _not_configured(res, "damping"):
+        return
+    sec = rep.section(_title("Damping identification", res, "Table 3", "half_power_alpha"))
     if _stage_missing(sec, res, "damping"):
         return
     d = res.results["damping"]
@@ -423,9 +469,13 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
             w = 2 * np.pi * hp["fn_hz"][i]
             row["zeta SYNTHETIC truth"] = truth_pair[0] / (2 * w) + truth_pair[1] * w / 2
         rows.append(row)
+    by_test: dict[str, list[int]] = {}
+    for i, t in enumerate(tests):
+        by_test.setdefault(str(t), []).append(i + 1)
+    origin = "; ".join(f"{_list_modes(m)} from the {t} test" for t, m in by_test.items())
     sec.table(pd.DataFrame(rows), "damping_per_mode",
-              "Identified damping per mode (modes 1-2 from the long impact test, the "
-              "higher ones from the short broadband test)", passed_column=None)
+              "Identified damping per mode" + (f" ({origin})" if origin else ""),
+              passed_column=None)
     rows = []
     ch = d.get("rayleigh_chowdhury", {})
     ls = d.get("rayleigh_least_squares", {})
@@ -437,13 +487,16 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
              f"all {ls.get('n_modes', '')} identified modes", ls.get("error", "")),
             ("chowdhury", "Chowdhury", anchors, ch.get("error", ch.get("note", "")))):
         r = d.get(f"rayleigh_{meth}", {})
-        rows.append({"method": label, "modes used": used,
-                     "alpha [1/s]": r.get("alpha", float("nan")),
-                     "beta [s]": r.get("beta", float("nan")),
-                     "alpha paper": _ref(res, f"{meth}_alpha", float("nan")),
-                     "beta paper": _ref(res, f"{meth}_beta", float("nan")),
-                     "note": note})
-    sec.table(pd.DataFrame(rows), "table3_rayleigh", "Table 3: Rayleigh alpha and beta",
+        row = {"method": label, "modes used": used,
+               "alpha [1/s]": r.get("alpha", float("nan")),
+               "beta [s]": r.get("beta", float("nan"))}
+        if _has_refs(res, "half_power_alpha"):
+            row["alpha paper"] = _ref(res, f"{meth}_alpha", float("nan"))
+            row["beta paper"] = _ref(res, f"{meth}_beta", float("nan"))
+        row["note"] = note
+        rows.append(row)
+    sec.table(pd.DataFrame(rows), "table3_rayleigh",
+              _title("Rayleigh alpha and beta", res, "Table 3", "half_power_alpha"),
               passed_column=None)
     if "error" in ch:
         sec.text("Chowdhury pair not computed: its anchor rule (mode 1 and the lowest mode at "
@@ -454,15 +507,16 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
         pair = ch["pairing"]
         sec.text(f"Chowdhury pair: anchors at identified modes {ch['anchors'][0] + 1} and "
                  f"{ch['anchors'][1] + 1}; target cumulative effective mass "
-                 f"{ch['target_mass']:g} (paper), used {ch['target_used']:.3f}; the "
+                 f"{ch['target_mass']:g} (study), used {ch['target_used']:.3f}; the "
                  f"identified modes hold {ch['mass_reached']:.3f} of the effective mass (uz) "
                  "of the FE model used for the SE (updated when updating ran), each paired "
                  "with the FE mode nearest in frequency. "
-                 + ("That is below the paper's target (and below EN 1998's 0.90), so the "
+                 + ("That is below the target (and below EN 1998's 0.90), so the "
                     "upper anchor is the mode at which the highest fraction reached is "
                     "attained. " if ch["note"] else "")
-                 + "The paper's Chowdhury pair rests on damping ratios the paper does not "
-                 "give, so it is not expected to be reproduced.")
+                 + (f"The Chowdhury pair of {_refs_name(res)} rests on damping ratios "
+                    "that are not published with it, so it is not expected to be "
+                    "reproduced." if _has_refs(res, "chowdhury_alpha") else ""))
         sec.table(pd.DataFrame({
             "identified mode": [a + 1 for a in range(len(pair["fe_mode"]))],
             "FE mode": pair["fe_mode"], "FE fn_hz": pair["fe_fn_hz"],
@@ -518,15 +572,18 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
                    "half-power bands of the higher identified modes (shaded).")
     if arr is not None and "frf_abs" in arr:
         bands = _bands("impact")
+        coh = arr["coherence"].values if "coherence" in arr else None
         sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values, bands=bands,
-                            ylabel=f"|H| [{d.get('frf_units', '')}]",
+                            ylabel=f"|H| [{d.get('frf_units', '')}]", coherence=coh,
                             title="Impact FRF (H1) with half-power bands"),
-                   "Impact-test FRF with the half-power bands of each mode (shaded).")
+                   "Impact-test FRF with the half-power bands of each mode (shaded) and its "
+                   "coherence (below): where the coherence drops, the FRF is not to be trusted.")
         for i, (lo, hi, fn) in enumerate(bands):
             w = max(6 * (hi - lo), 0.3)
             sec.figure(partial(plot_frf, arr["frequency"].values, arr["frf_abs"].values,
                                 bands=[(lo, hi, fn)], f_range=(fn - w, fn + w),
-                                ylabel="|H|", markers=True,
+                                ylabel=f"|H| [{d.get('frf_units', '')}]", markers=True,
+                                coherence=coh,
                                 title=f"Mode {i + 1}: zoom on the half-power band"),
                        f"Half-power band of mode {i + 1} and the frequency lines across it.")
     if arr is not None and "decay_x" in arr and d.get("envelope"):
@@ -548,7 +605,9 @@ def _section_damping(rep: Report, res: StudyResult) -> None:
 def _section_fe(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_mode_shapes
 
-    sec = rep.section("FE model and updating (paper Table 2)")
+    if _not_configured(res, "fe"):
+        return
+    sec = rep.section(_title("FE model and updating", res, "Table 2", "fe_fn_hz"))
     if _stage_missing(sec, res, "fe"):
         return
     fe = res.results["fe"]
@@ -574,7 +633,8 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         cols["paper FE"] = _ref(res, "fe_fn_hz")
     if targets:
         sec.table(frequency_table(cols, "experiment"), "table2_frequencies",
-                  "Table 2: FE vs experiment eigenfrequencies [Hz] (errors in % of the "
+                  ("Table 2: " if _has_refs(res, "fe_fn_hz") else "")
+                  + "FE vs experiment eigenfrequencies [Hz] (errors in % of the "
                   "experiment)", passed_column=None)
         text = _model_form_text(res)
         if text:
@@ -591,11 +651,13 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         k = min(len(up["model_fn_hz"]), len(modes))
         modes["fn_hz updated"] = np.nan
         modes.loc[: k - 1, "fn_hz updated"] = up["model_fn_hz"][:k]
-    sec.table(modes, "fe_modes", "Lowest modes of the FE model (modes the paper does not "
-              "list are shown too)", passed_column=None)
+    sec.table(modes, "fe_modes", f"The {len(modes)} lowest modes of the FE model",
+              passed_column=None)
     if up:
         truth = res.study.config.get("truth") or {}
-        prm = pd.DataFrame({"parameter": up["parameters"], "initial": up["initial_values"],
+        prm = pd.DataFrame({"parameter": up["parameters"],
+                            "unit": [parameter_unit(p) for p in up["parameters"]],
+                            "initial": up["initial_values"],
                             "updated": up["values"], "std": up["std"],
                             "at bound": up["at_bound"]})
         if truth:
@@ -614,6 +676,8 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.figure(partial(plot_mode_shapes, arr["nodes"].values, arr["uz"].values[:, :k],
                                     fe["fn_hz"][:k]),
                    "Mode shapes (uz) of the nominal FE model; black line: nodal line.")
+        if "correlation" not in res.results:
+            _mode_animation(sec, res)
 
 
 def _nominal_by_pairing(fe: dict, up: dict | None, targets) -> list:
@@ -682,7 +746,10 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
     sec.table(pd.DataFrame(u["statistics"]), "uncertainty_statistics",
               "Sampled eigenfrequency statistics per mode [Hz] (std with ddof = 1, "
               "cov = std / mean)", passed_column=None)
-    sec.table(pd.DataFrame(u["parameters"]), "uncertainty_inputs",
+    inputs = pd.DataFrame(u["parameters"])
+    if "path" in inputs:
+        inputs.insert(1, "unit", [parameter_unit(p) for p in inputs["path"]])
+    sec.table(inputs, "uncertainty_inputs",
               "Input scatter (mean and std in SI units) and log-sensitivities of the "
               "eigenfrequencies", passed_column=None)
     for w in u.get("warnings", []):
@@ -697,7 +764,9 @@ def _section_uncertainty(rep: Report, res: StudyResult) -> None:
 
 
 def _section_se(rep: Report, res: StudyResult) -> None:
-    sec = rep.section("Super element (paper Tables 4 and 5)")
+    if _not_configured(res, "reduction"):
+        return
+    sec = rep.section(_title("Super element", res, "Tables 4 and 5", "fe4_fn_hz", "se4_fn_hz"))
     if _stage_missing(sec, res, "reduction"):
         return
     r = res.results["reduction"]
@@ -709,20 +778,26 @@ def _section_se(rep: Report, res: StudyResult) -> None:
         if fe_s and se_s and len(sizes) == len(fe_s):
             sizes["paper FE"] = fe_s
             sizes["paper SE"] = se_s
-        sec.table(sizes, "table4_sizes", "Table 4: FE vs SE model sizes", passed_column=None)
+        sec.table(sizes, "table4_sizes", ("Table 4: " if fe_s and se_s else "")
+                  + "FE vs SE model sizes", passed_column=None)
     m = pd.DataFrame(r["modes"])
     fe4, se4 = _ref(res, "fe4_fn_hz"), _ref(res, "se4_fn_hz")
     if fe4 and se4 and len(fe4) >= len(m):
         m["paper FE"] = fe4[: len(m)]
         m["paper SE"] = se4[: len(m)]
-    sec.text("A truncated Craig-Bampton SE can only be stiffer than its FE model "
-             "(Rayleigh-Ritz bound). The paper's SE (SAMCEF) is 1.7-4.8 % stiffer than its FE "
-             "model; with the same size (5 retained nodes, 10 fixed-interface modes) mvtk's SE "
-             "is much closer, as the table shows: a reduction error of a few percent is not "
-             "inherent to the method.")
-    sec.table(m, "table5_fe_vs_se", "Table 5: FE vs SE eigenfrequencies [Hz]; error_pct = "
-              "100 (SE - FE) / FE, error_pct_of_se = 100 (SE - FE) / SE (the paper's "
-              "convention)", passed_column=None)
+    n_ret = len(r["retained_nodes"])
+    n_fix = res.study.config["reduction"].get("n_modes")
+    text = (f"Craig-Bampton super element with {n_ret} retained nodes and {n_fix} "
+            "fixed-interface modes. A truncated Craig-Bampton SE can only be stiffer than "
+            "its FE model (Rayleigh-Ritz bound); its eigenfrequency errors are in the table.")
+    if fe4 and se4:
+        pub = 100 * (np.asarray(se4, float) / np.asarray(fe4, float) - 1)
+        text += (f" The published SE of {_refs_name(res)} is {pub.min():.2g}-{pub.max():.2g} "
+                 "% stiffer than its own FE model.")
+    sec.text(text)
+    sec.table(m, "table5_fe_vs_se", ("Table 5: " if fe4 and se4 else "")
+              + "FE vs SE eigenfrequencies [Hz]; error = 100 (SE - FE) / FE, error of SE = "
+              "100 (SE - FE) / SE", passed_column=None)
     if r.get("static"):
         st = pd.DataFrame(r["static"])
         num = st.select_dtypes("number")
@@ -738,6 +813,8 @@ def _section_se(rep: Report, res: StudyResult) -> None:
 def _section_control(rep: Report, res: StudyResult) -> None:
     from ..plot import plot_spectra, plot_time_responses
 
+    if _not_configured(res, "control"):
+        return
     sec = rep.section("Active vibration control on the SE")
     if _stage_missing(sec, res, "control"):
         return
@@ -757,29 +834,30 @@ def _section_control(rep: Report, res: StudyResult) -> None:
             f"FE model, {1e6 * act['tip_per_volt_plant_m']:.4g} um/V from the plant "
             f"({act['plant_modes']} eigenmodes up to {act['plant_fn_max_hz']:.0f} Hz plus "
             f"the static residual); damping: {act['damping']}. "
-            f"Actuator limit: +-{c['actuator_limit_v']:g} V.")
+            f"Actuator limit: ±{c['actuator_limit_v']:g} V ([control] actuator_limit_v).")
         em = pd.DataFrame(act["emcc"])
         if len(em):
             sec.table(em, "piezo_emcc", "Modal electromechanical coupling k^2 = (f_oc^2 - "
                       "f_sc^2) / f_sc^2 of each electrode (the others shorted)",
                       passed_column=None)
     elif act:
+        eq7 = act.get("paper_eq7_moment_per_volt", float("nan"))
+        eq7_text = (f" ({_refs_name(res)}, printed eq. 7: {eq7:.5g} N m/V)"
+                    if res.study.config.get("references") and np.isfinite(eq7) else "")
         sec.text(
             f"Actuator input: the voltage of patch '{act['name']}' (V). Moment per volt "
-            f"(paper eqs. 3-6 integrated over the steel/epoxy/PIC 151 stack): "
-            f"{act['moment_per_volt_per_m']:.5g} N m/(V m), times the patch width "
-            f"{1e3 * act['width_m']:.4g} mm = {act['moment_per_volt']:.5g} N m/V (the paper's "
-            f"printed eq. 7: {act['paper_eq7_moment_per_volt']:.5g} N m/V). As in the paper "
-            "(moments at its nodes 2 and 3) the moment pair acts on the rotations of the two "
-            "retained actuator-edge nodes, where the super element represents it exactly "
-            "(constraint modes). Static tip deflection per volt on the full FE model: "
+            "(pin-force model, Crawley & de Luis 1987, integrated over the layers under the "
+            f"patch): {act['moment_per_volt_per_m']:.5g} N m/(V m), times the patch width "
+            f"{1e3 * act['width_m']:.4g} mm = {act['moment_per_volt']:.5g} N m/V{eq7_text}. "
+            "The moment pair acts on the rotations of the two retained actuator-edge nodes, "
+            "where the super element represents it exactly (constraint modes). Static tip "
+            "deflection per volt on the full FE model: "
             f"{1e6 * act['tip_per_volt_nodes_m']:.4g} um/V with the moments at the two nodes, "
             f"{1e6 * act['tip_per_volt_edge_lines_m']:.4g} um/V with the same moments spread "
             "along the patch edge lines; SE plant DC gain "
             f"{1e6 * act['tip_per_volt_plant_m']:.4g} um/V ({act['plant_modes']} SE eigenmodes "
             f"up to {act['plant_fn_max_hz']:.0f} Hz plus the static residual of the others). "
-            f"Actuator limit: +-{c['actuator_limit_v']:g} V (PIC 151, 0.25 mm: the "
-            "-0.4 kV/mm field limit against the poling direction, used for both signs).")
+            f"Actuator limit: ±{c['actuator_limit_v']:g} V ([control] actuator_limit_v).")
         if act.get("tip_per_volt_shell_coupled_m") is not None:
             w_c, w_e = act["tip_per_volt_shell_coupled_m"], act["tip_per_volt_edge_lines_m"]
             sec.text(
@@ -788,23 +866,25 @@ def _section_control(rep: Report, res: StudyResult) -> None:
                 f"deflects the tip by {1e6 * w_c:.4g} um/V, {100 * (w_c / w_e - 1):+.0f} % "
                 "against the edge-line moments: the plate around the patch holds it "
                 "laterally, so it bends the plate with the factor 1 + nu of cylindrical "
-                "bending that the beam-like eq. 3 leaves out. The plant keeps the paper's "
-                "pin-force model (its numbers are the paper's method).")
+                "bending that the beam-like pin-force model leaves out. The plant keeps the "
+                "pin-force model.")
+    lyap = [k["name"] for k in cfg.get("controllers", [])
+            if str(k.get("type", "")).startswith("Lyapunov")]
     sec.text("The SE plant is released from its first mode with a tip displacement of "
              f"{cfg['initial_tip_displacement_m']:g} m and the controllers are switched on "
-             "at t = 0. Peak voltage in V and the equivalent edge moment in N m (the paper "
-             "quotes moments); closed-loop zeta of the linear controllers is the "
-             "small-signal one (command below the limit). Settling time: after it the tip "
-             "displacement stays "
-             f"within {100 * c['settle_band']:g} % of its initial amplitude. The Lyapunov "
-             "controller is the velocity form with a boundary layer (mvtk.control."
-             "LyapunovBangBang); being nonlinear it has no closed-loop poles (zeta shown as –).")
+             "at t = 0. Peak voltage in V and the equivalent edge moment in N m; closed-loop "
+             "zeta of the linear controllers is the small-signal one (command below the "
+             "limit). Settling time: after it the tip displacement stays "
+             f"within {100 * c['settle_band']:g} % of its initial amplitude."
+             + (f" {', '.join(lyap)}: the velocity form of the Lyapunov controller with a "
+                "boundary layer (mvtk.control.LyapunovBangBang); being nonlinear it has no "
+                "closed-loop poles (zeta shown as –)." if lyap else ""))
     df = pd.DataFrame(c["metrics"])
     sec.table(df, "controller_comparison", "Controller comparison", passed_column=None)
     ps, os_ = _ref(res, "ppf_settling_s"), _ref(res, "other_settling_s")
     if ps is not None:
-        sec.text(f"Paper (section 4.3): PPF settles in about {ps} s, SRF and Lyapunov in "
-                 f"about {os_} s.")
+        sec.text(f"{_refs_name(res)}: PPF settles in about {ps} s, the other controllers "
+                 f"in about {os_} s.")
     arr = res.arrays.get("control")
     if arr is not None:
         t = arr["time"].values
@@ -892,10 +972,9 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
         worst = pred.loc[pred["df_pct"].abs().idxmax()]
         sec.text(f"Model-form check: {len(pred)} mode(s) not used as targets are predicted "
                  f"within {abs(worst['df_pct']):.2g} % (worst: test mode "
-                 f"{int(worst['test_mode'])} at {worst['fn_test_hz']:.2f} Hz). The "
-                 "nominal model lacks what the specimen has (sensor mass, bolted clamp, sheet "
-                 "thickness, finer mesh: data/smart_beam/README.md for the SYNTHETIC case); "
-                 "modes that load those details most are predicted worst.")
+                 f"{int(worst['test_mode'])} at {worst['fn_test_hz']:.2f} Hz). Whatever "
+                 "the specimen has and the model lacks (added masses, joints, thickness "
+                 "tolerances, mesh) shows most in the modes that load those details.")
     dofs = pd.DataFrame(cor["dofs"])
     dofs = dofs.drop(columns=[c for c in ("index",) if c in dofs.columns])
     sec.table(dofs, "correlation_dofs", "Sensor mapping and COMAC per test DOF",
@@ -905,12 +984,160 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
                 "FE mesh with the test wireframe and sensors"}
     for name, b64 in cor["figures"].items():
         sec.figure(_png(b64), captions.get(name, name))
+    _mode_animation(sec, res)
+
+
+def _stage_warnings(res: StudyResult) -> list[str]:
+    """Warnings the stages raised, and results the stages marked as not reliable."""
+    out: list[str] = []
+    for stage, r in res.results.items():
+        if not isinstance(r, dict):
+            continue
+        for key in sorted(k for k in r if str(k).endswith("warnings")):
+            out += [f"{stage}: {w}" for w in (r[key] or [])]
+        for sub in r.values():   # e.g. damping.rayleigh_chowdhury.warnings
+            if isinstance(sub, dict):
+                out += [f"{stage}: {w}" for w in (sub.get("warnings") or [])]
+    mod = res.results.get("modal")
+    if mod:
+        t = pd.DataFrame(mod["table"])
+        if "reliable" in t:
+            for _, row in t[~t["reliable"].astype(bool)].iterrows():
+                out.append(f"modal: identified mode {int(row['mode'])} at "
+                           f"{row['fn_hz']:.4g} Hz is not reliable: {row.get('reason', '')}")
+    cor = res.results.get("correlation")
+    if cor:
+        pairs = pd.DataFrame(cor["pairs"])
+        for _, p in pairs.iterrows():
+            if not bool(p.get("paired", True)):
+                out.append(f"correlation: test mode {p['test_mode']} has no FE partner"
+                           + (f" ({p['reason']})" if p.get("reason") else ""))
+    up = res.results.get("updating")
+    if up:
+        for name, at in zip(up["parameters"], up.get("at_bound", [])):
+            if at:
+                out.append(f"updating: {name} ended at a bound of its range")
+        if up.get("identifiable") is False:
+            out.append("updating: the parameters are not identifiable from the targets")
+    return list(dict.fromkeys(out))
+
+
+#: two estimates of one mode's damping ratio from different sections that differ by more
+#: than this factor are listed as an inconsistency in the summary
+ZETA_FACTOR = 1.5
+
+
+def _inconsistencies(res: StudyResult) -> list[str]:
+    """Disagreements between sections: one mode's frequency and damping from the
+    single-point tests (half-power) and the multi-point test (pLSCF + LSFD)."""
+    hp = (res.results.get("damping") or {}).get("half_power")
+    mod = res.results.get("modal")
+    if not hp or not mod:
+        return []
+    tol = res.study.config["checks"]["identified_fn_rel"]
+    t = pd.DataFrame(mod["table"])
+    f_m, z_m = t["fn_hz"].to_numpy(float), t["zeta"].to_numpy(float)
+    out = []
+    tests = hp.get("test", ["impact"] * len(hp["fn_hz"]))
+    for i, (fn, z, test) in enumerate(zip(hp["fn_hz"], hp["zeta"], tests)):
+        if not np.isfinite([fn, z]).all() or not len(f_m):
+            continue
+        j = int(np.argmin(np.abs(f_m - fn)))
+        if abs(f_m[j] / fn - 1) > 0.05:
+            continue   # not the same mode
+        if abs(f_m[j] / fn - 1) > tol:
+            out.append(f"mode {i + 1}: {fn:.5g} Hz from the {test} test (half-power) vs "
+                       f"{f_m[j]:.5g} Hz from the multi-point test ({100 * (f_m[j] / fn - 1):+.2g}"
+                       f" %, more than the {100 * tol:g} % identification tolerance)")
+        if z > 0 and z_m[j] > 0 and max(z / z_m[j], z_m[j] / z) > ZETA_FACTOR:
+            out.append(f"mode {i + 1} ({fn:.4g} Hz): damping ratio {z:.3g} from the {test} test "
+                       f"(half-power) vs {z_m[j]:.3g} from the multi-point test (pLSCF): a "
+                       f"factor {max(z / z_m[j], z_m[j] / z):.2g} apart (more than "
+                       f"{ZETA_FACTOR:g})")
+    return out
+
+
+def _relative_strings(obj, base: Path):
+    """``obj`` (a parsed study) with every absolute path written relative to ``base``."""
+    if isinstance(obj, dict):
+        return {k: _relative_strings(v, base) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_relative_strings(v, base) for v in obj]
+    if isinstance(obj, str | Path) and Path(obj).is_absolute():
+        return relative_path(obj, base)
+    return obj
+
+
+def _mode_animation(sec, res: StudyResult) -> None:
+    """Animated FE mode shapes on the FE mesh; with a multi-point test, the test
+    wireframe over it moving with the identified mode paired to each FE mode by MAC."""
+    arr = res.arrays.get("fe")
+    if arr is None:
+        return
+    fe = res.results["fe"]
+    xyz = np.asarray(arr["nodes"].values, dtype=float)
+    uz = np.asarray(arr["uz"].values, dtype=float)
+    k = uz.shape[1]
+    fn = list(fe["fn_hz"])[:k]
+    labels = [f"FE mode {i + 1}: {fn[i]:.4g} Hz" for i in range(k)]
+    overlay = None
+    caption = (f"The {k} lowest modes of the nominal FE model (uz) on its mesh; drag to "
+               "rotate, choose the mode above. The page plays it offline.")
+    marr = res.arrays.get("modal")
+    if marr is not None and "modal" in res.results:
+        from ._ema import geometry_of
+
+        files = res.study.extra_files
+        study = SimpleNamespace(has_extra_file=files.__contains__, extra_file=files.__getitem__)
+        try:
+            geo = geometry_of(study, marr)
+        except Exception:   # noqa: BLE001 - the animation shows the FE model alone
+            geo = None
+        if geo is not None:
+            shapes = np.real(np.asarray(marr["shapes"].values))        # (mode, dof)
+            vec = geo.sensor_vectors()                                   # (dof, 3)
+            rows = [geo.row(sn.node) for sn in geo.sensors]
+            disp = np.zeros((geo.n_nodes, 3, shapes.shape[0]))
+            for d, r in enumerate(rows):
+                disp[r] += vec[d][:, None] * shapes[:, d][None, :]
+            # FE uz at the FE node nearest each test node: MAC pairing and sign
+            near = np.argmin(np.linalg.norm(xyz[None, :, :] - geo.xyz[:, None, :], axis=2),
+                             axis=1)
+            fe_at = uz[near]                                             # (n_test, k)
+            test_z = disp[:, 2, :]                                       # (n_test, modes)
+            num = (fe_at.T @ test_z) ** 2
+            den = np.outer((fe_at**2).sum(0), (test_z**2).sum(0))
+            mac = np.divide(num, den, out=np.zeros_like(num), where=den > 0)   # (k, modes)
+            ov = np.full((geo.n_nodes, 3, k), np.nan)
+            f_test = np.asarray(marr["fn_hz"].values, dtype=float)
+            for j in range(shapes.shape[0]):
+                i = int(np.argmax(mac[:, j]))
+                if mac[i, j] < 0.5 or np.isfinite(ov[0, 0, i]):
+                    continue
+                sign = np.sign(fe_at[:, i] @ test_z[:, j]) or 1.0
+                ov[:, :, i] = sign * disp[:, :, j]
+                labels[i] += f" / test mode {j + 1}: {f_test[j]:.4g} Hz (MAC {mac[i, j]:.2f})"
+            edges = geo.edges()
+            overlay = {"xyz": geo.xyz, "shapes": ov, "name": "test wireframe",
+                       "edges": edges if len(edges) else None}
+            caption = (f"The {k} lowest modes of the nominal FE model (uz, blue mesh) with "
+                       f"the test wireframe ({geo.n_nodes} test nodes, red"
+                       + ("" if len(edges) else "; lines: triangulation of the test nodes")
+                       + ") moving with the identified mode paired to each FE mode by MAC "
+                       "(0.5 at least); drag to rotate, choose the mode above. The page "
+                       "plays it offline.")
+    sec.mode_animation(xyz, uz, labels, caption, overlay=overlay)
 
 
 def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     """Write ``res.out_dir/index.html`` (+ tables/*.csv) and return the page path."""
-    title = f"mvtk validation report: {res.study.name}"
+    import datetime as _dt
+
+    doc = dict(res.study.config.get("report") or {})
+    title = doc.pop("title", None) or f"Validation report: {res.study.name}"
     rep = Report(title)
+    doc["date"] = doc.get("date") or _dt.datetime.now(_dt.UTC).date().isoformat()
+    rep.set_document(**doc)
     _section_run(rep, res)
     _section_measurements(rep, res)
     _section_damping(rep, res)
@@ -923,7 +1150,10 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     checks = study_checks(res)
     checks_df = check_table(checks)
     if checks:
-        sec.table(checks_df, "checks", "Checks against the study's tolerances")
+        sec.table(display_checks(checks_df), "checks", "Checks against the study's tolerances "
+                  "(deviation: relative error of a two-sided check; margin: distance to the "
+                  "nearest limit in % of that limit, negative when failed)")
+        rep.tables["checks"] = checks_df   # the CSV keeps the tolerance as defined
     else:
         sec.unavailable("no check could be evaluated (no stage produced comparable numbers)")
     done = [s for s in ("damping", "modal", "updating", "correlation", "reduction", "control")
@@ -939,7 +1169,12 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
                    f"{', '.join(done) or 'none'}"),
         against=(f"the measurements {', '.join(tests) or '(none)'}"
                  + (" (SYNTHETIC)" if res.study.synthetic else "")
-                 + " and the tolerances and references of the study file"))
-    params = {"study": res.study.config, "file_sha256": hashes}
-    rep.add_provenance(collect_provenance(res.study.input_files, params))
+                 + " and the tolerances"
+                 + (" and references" if res.study.config.get("references") else "")
+                 + " of the study file"),
+        warnings=_stage_warnings(res), inconsistencies=_inconsistencies(res))
+    base = res.study.path.parent
+    params = {"study": _relative_strings(res.study.config, base),
+              "file_sha256": {relative_path(k, base): v for k, v in hashes.items()}}
+    rep.add_provenance(collect_provenance(res.study.input_files, params, base=base))
     return rep.write(res.out_dir)

@@ -468,6 +468,20 @@ SCHEMA: dict[str, Table] = {
         "other_settling_s": _pos("Published settling time of the other controllers.", None,
                                  "s"),
     }),
+    "report": Table(
+        "The report as a controlled document: its title page and sign-off block, and the "
+        "running header of the PDF.", {
+            "title": Key("str", "Document title (default: 'Validation report: ' and the "
+                         "study name).", None),
+            "document_number": Key("str", "Document number (e.g. 'VR-2026-014').", None),
+            "revision": Key("str", "Revision (e.g. 'A', '1.2').", None),
+            "date": Key("str", "Issue date as written on the title page (default: the "
+                        "date of the run).", None),
+            "author": Key("str", "Who prepared the report.", None),
+            "reviewer": Key("str", "Who checked it.", None),
+            "approver": Key("str", "Who approved it.", None),
+            "organisation": Key("str", "Organisation issuing the report.", None),
+        }),
     "truth": Table(
         "SYNTHETIC data only: the simulated specimen. Dotted structure paths -> values, "
         "and rayleigh_alpha, rayleigh_beta (damping of every simulated mode).",

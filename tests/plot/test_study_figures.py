@@ -203,6 +203,11 @@ def test_mesh_figure_draws_each_edge_once_with_the_sensors(plate):
     assert len(keys) == len(segs)
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert "z sensors" in labels
+    # the geometry has no trace lines: its 5 x 4 grid of nodes is triangulated, dashed,
+    # (5-1) 4 + 5 (4-1) grid edges and (5-1)(4-1) diagonals
+    wire = ax.collections[1]
+    assert wire.get_label().startswith("test wireframe (triangulated")
+    assert len(wire.get_segments()) == 4 * 4 + 5 * 3 + 4 * 3
     sensors = [ln for ln in ax.lines if ln.get_label() == "z sensors"][0]
     np.testing.assert_allclose(np.c_[sensors.get_xdata(), sensors.get_ydata()],
                                geo.xyz[:, :2] * 1e3)
@@ -327,4 +332,19 @@ def test_mode_shape_panels_share_their_given_ticks():
     assert min(xt) >= 0 and max(xt) <= 180 and min(yt) >= 0 and max(yt) <= 135
     assert [t.get_text() for t in cbar.get_yticklabels()] == ["\u22121.0", "\u22120.5", "0.0",
                                                               "0.5", "1.0"]
+    assert_readable(fig)
+
+
+def test_frf_with_coherence_and_close_peak_labels_stays_readable():
+    """Two modes 1.5 Hz apart (labels would collide) and a coherence panel below."""
+    from mvtk.plot import plot_frf
+
+    f = np.linspace(5.0, 60.0, 2000)
+    h = 1 / (20.0**2 - f**2 + 0.4j * f) + 1 / (21.5**2 - f**2 + 0.4j * f)
+    coh = 1 - 0.5 * np.exp(-((f - 40.0) / 2.0) ** 2)          # a dip at an antiresonance
+    fig = plot_frf(f, h, bands=[(19.9, 20.1, 20.0), (21.4, 21.6, 21.5)],
+                   ylabel="|H| [m/N]", coherence=coh, title="FRF and coherence")
+    assert len(fig.axes) == 2 and fig.axes[1].get_ylabel() == "coherence"
+    y = fig.axes[1].lines[0].get_ydata()
+    assert min(y) == pytest.approx(0.5, abs=1e-3)              # the dip is drawn
     assert_readable(fig)

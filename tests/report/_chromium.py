@@ -189,3 +189,48 @@ def measure_layout(chromium: str, page_path: Path, user_dir: Path, widths=(1024,
             proc.wait(timeout=10)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+def evaluate_after(chromium: str, page_path: Path, user_dir: Path, expressions,
+                   wait_s: float = 1.0, width: int = 1280, height: int = 900):
+    """Load the page, wait ``wait_s`` seconds between the expressions (JavaScript,
+    evaluated by value); return (values, console errors and exceptions)."""
+    proc = subprocess.Popen(
+        [chromium, *FLAGS, f"--user-data-dir={user_dir}", "--remote-debugging-port=0",
+         "about:blank"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+    )
+    try:
+        port = _devtools_port(user_dir, proc)
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/json/list", timeout=10) as r:
+            targets = json.load(r)
+        page = next(t for t in targets if t.get("type") == "page")
+        cdp = _Cdp(page["webSocketDebuggerUrl"])
+        for domain in ("Runtime", "Log", "Page"):
+            cdp.call(f"{domain}.enable")
+        cdp.call("Emulation.setDeviceMetricsOverride", width=width, height=height,
+                 deviceScaleFactor=1, mobile=False)
+        cdp.call("Page.navigate", url=page_path.as_uri())
+        cdp.wait_event("Page.loadEventFired")
+        values = []
+        for expr in expressions:
+            time.sleep(wait_s)
+            res = cdp.call("Runtime.evaluate", expression=expr, returnByValue=True,
+                           awaitPromise=True)
+            values.append(res["result"].get("value"))
+        errors = [
+            ev for ev in cdp.events
+            if ev.get("method") == "Runtime.exceptionThrown"
+            or (ev.get("method") == "Runtime.consoleAPICalled"
+                and ev["params"].get("type") in ("error", "assert"))
+            or (ev.get("method") == "Log.entryAdded"
+                and ev["params"]["entry"].get("level") == "error")
+        ]
+        cdp.ws.close()
+        return values, errors
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=10)
+        except subprocess.TimeoutExpired:
+            proc.kill()

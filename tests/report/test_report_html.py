@@ -36,7 +36,8 @@ class _Collector(HTMLParser):
             self.pass_cells += 1
         if tag == "td" and a.get("class") == "fail":
             self.fail_cells += 1
-        if tag in ("script", "link") or (tag == "img" and not a["src"].startswith("data:")):
+        if (tag == "script" and "src" in a) or tag == "link" or (
+                tag == "img" and not a["src"].startswith("data:")):
             self.external.append(tag)
 
 
@@ -110,8 +111,9 @@ def test_render_table_formats_by_quantity():
                        "error_pct": [0.00027713670949780034, 2.5e-07],
                        "mac": [0.9999999992121509, 0.999999999594787]})
     html = render_table(df, passed_column=None)
-    assert "<th>fe [Hz]</th>" in html and "<th>error [%]</th>" in html
-    assert "<td>13.277</td>" in html and "<td>2.77e-4</td>" in html
+    assert "<th>FE [Hz]</th>" in html and "<th>error [%]</th>" in html
+    # a percent column in fixed notation (one notation per column)
+    assert "<td>13.277</td>" in html and "<td>0.000277</td>" in html
     assert "<td>&lt; 1e-6</td>" in html and "<td>1.000</td>" in html
     assert "13.277063" not in html
     html = render_table(df, passed_column=None, formats={"fe_hz": 8})
@@ -138,9 +140,11 @@ def test_executive_summary_verdict_and_worst_checks():
                           against="paper Tables 2-3", n_worst=3)
     text = rep.to_html()
     assert rep.summary_verdict == "FAIL: 2 of 5 checks failed"
-    # at the top: before the table of contents and the first section
+    # at the top of the page, before the first section; the contents are a sidebar
+    # (first in the page, fixed at the left on a wide screen) that links to it
     pos = text.index('id="executive-summary"')
-    assert pos < text.index("<nav>") < text.index('<section id="s1">')
+    assert text.index('<nav class="toc">') < pos < text.index('<section id="s1">')
+    assert 'href="#executive-summary"' in text
     summary = text[pos:text.index("</section>", pos)]
     assert "FE model and damping of the smart beam" in summary and "paper Tables 2-3" in summary
     # failed first, then the passing one closest to its limit; 3 rows only
@@ -353,3 +357,53 @@ def test_pdf_refused_clearly_without_chromium(tmp_path, monkeypatch):
     with pytest.raises(PdfExportError, match=r"failed to print .* \(exit code 1\)"):
         to_pdf(tmp_path / "out")
     assert not (tmp_path / "out" / "report.pdf").exists()
+
+
+def test_summary_ranks_graded_checks_and_lists_the_others_apart():
+    from mvtk.report import classify_checks
+
+    checks = check_table([
+        Check("f5 prediction", 171.82, 176.36, 0.03, "Hz"),            # -2.57 % of ±3 %
+        Check("f1", 13.26, 13.26, 0.005, "Hz"),                          # on the reference
+        Check("MAC", 0.984, 0.9, 0.0, kind="lower"),                     # slack 9.3 %
+        Check("peak voltage", 100.0, 100.0, 0.0, "V", kind="upper"),     # saturated
+        Check("stable", 1.0, 1.0, 0.0, kind="lower"),                    # yes/no
+        Check("SE >= FE", 13.28, 13.277, 1.3e-8, "Hz", kind="lower"),    # exact bound
+    ])
+    cls = classify_checks(checks)
+    assert list(cls["category"]) == ["graded", "graded", "graded", "at limit", "yes/no",
+                                     "exact bound"]
+    # margin: distance to the nearest limit in % of it; 171.82 vs 0.97 * 176.36
+    assert cls["margin_pct"][0] == pytest.approx(100 * (171.82 / (0.97 * 176.36) - 1))
+    assert cls["margin_pct"][2] == pytest.approx(100 * (0.984 / 0.9 - 1))
+    rep = Report("r")
+    rep.executive_summary(checks, validated="x", against="y", n_worst=2,
+                          warnings=["damping: 2 lines in the band"],
+                          inconsistencies=["mode 1: zeta a factor 8.8 apart"])
+    text = rep.to_html()
+    worst = text[text.index('id="table-summary-worst"'):]
+    worst = worst[:worst.index("</table>")]
+    assert re.findall(r'<tr><td class="text">([^<]+)</td>', worst) == ["f5 prediction", "f1"]
+    apart = text[text.index('id="table-summary-apart"'):]
+    assert "peak voltage" in apart and "at limit" in apart and "≤ 100 V" in apart
+    assert rep.summary_verdict == ("PASS WITH RESERVATIONS: all 6 checks passed, 1 met only "
+                                   "at the limit, 1 warning, 1 inconsistency")
+    assert "damping: 2 lines in the band" in text and "factor 8.8" in text
+    failed = Report("f")
+    failed.executive_summary(check_table([Check("f", 2.0, 1.0, 0.1)]), validated="x",
+                             against="y", warnings=["w"])
+    assert failed.summary_verdict == "FAIL: 1 of 1 checks failed"
+
+
+def test_empty_columns_are_left_off_the_page_but_kept_in_the_csv(tmp_path):
+    rep = Report("r")
+    df = pd.DataFrame({"stage": ["fe", "modal"], "note": ["", ""],
+                       "time_s": [0.5, float("nan")], "spare": [np.nan, np.nan]})
+    rep.section("Stages").table(df, "stages", passed_column=None)
+    page = rep.write(tmp_path).read_text(encoding="utf-8")
+    table = page[page.index('id="table-stages"'):]
+    table = table[:table.index("</table>")]
+    assert "<th" in table and "note" not in table and "spare" not in table
+    assert "time [s]" in table   # a column with one value stays
+    csv = pd.read_csv(tmp_path / "tables" / "stages.csv")
+    assert list(csv.columns) == ["stage", "note", "time_s", "spare"]

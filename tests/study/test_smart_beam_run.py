@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 
 import pandas as pd
@@ -229,3 +230,66 @@ def test_damping_table_is_the_one_of_mvtk_damping(out_dir, capsys):
         for key in ("fn_hz", "zeta", "f1_hz", "f2_hz"):
             assert [r[key] for r in rows] == pytest.approx([hp[key][i] for i in mine],
                                                            rel=1e-9, abs=0)
+
+
+def test_report_headers_are_labels_and_columns_have_one_notation(out_dir):
+    from report_scan import problems, tables
+
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    assert problems(html) == []
+    heads = {t: h for t, (h, _) in tables(html).items()}
+    ctl = heads["table-controller_comparison"]
+    assert "max real pole [1/s]" in ctl and "critical pole imag [rad/s]" in ctl
+    assert "stable orders" in heads["table-modal_modes"]
+    assert "unit" in heads["table-updating_parameters"]
+
+
+def test_summary_shows_the_checks_closest_to_failing_and_the_warnings(out_dir):
+    from report_scan import tables
+
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    t = tables(html)
+    heads, rows = t["table-summary-worst"]
+    first = dict(zip(heads, rows[0]))
+    # the model-form check of test mode 5: -2.57 % of ±3 % (correlation_pairs.csv)
+    assert first["check"].startswith("predicted f of test mode 5")
+    assert float(first["margin to the limit [%]"]) < 0.5
+    assert float(first["share of tolerance used [%]"]) == pytest.approx(85.8, abs=0.2)
+    # saturated actuators and the Rayleigh-Ritz bounds are listed apart, not ranked
+    apart = [r[0] for r in t["table-summary-apart"][1]]
+    assert any("peak voltage" in c for c in apart) and any("Rayleigh-Ritz" in c for c in apart)
+    assert not any("peak voltage" in r[0] for r in rows)
+    assert 'id="summary-warnings"' in html and "ResolutionWarning" in html
+    assert 'id="summary-inconsistencies"' in html
+    assert "PASS WITH RESERVATIONS" in html
+
+
+def test_report_animates_fe_and_identified_shapes_together(out_dir):
+    html = (out_dir / "index.html").read_text(encoding="utf-8")
+    assert html.count("<canvas") == 1 and 'id="mode-animation-1-data"' in html
+    # every identified mode paired with its FE mode by MAC over the test wireframe
+    for j, f in enumerate(("13.26", "41.14", "78.69", "137.8", "176.4", "224.5")):
+        assert re.search(rf"test mode {j + 1}: {re.escape(f)} Hz \(MAC (0\.9\d|1\.00)\)", html), f
+
+
+def test_printed_report_is_a_controlled_document(out_dir):
+    """The example's PDF read back: title block, header and page numbers on every page,
+    provenance without a path of this machine (needs Debian chromium)."""
+    pypdf = pytest.importorskip("pypdf", reason="pypdf is a test dependency")
+    from mvtk.report import find_chromium, to_pdf
+
+    if find_chromium() is None:
+        pytest.skip("chromium not installed (run tests/report/install_chromium.sh as root)")
+    # the example's own report (another test may have written a variant's into out_dir);
+    # every stage comes from the cache
+    assert run(STUDY, out_dir, progress=False).ok
+    reader = pypdf.PdfReader(str(to_pdf(out_dir / "index.html")))
+    texts = [p.extract_text() for p in reader.pages]
+    n = len(texts)
+    assert n > 10
+    for i, text in enumerate(texts):
+        assert "MVTK-EX-SB-001 rev. 1" in text and f"Page {i + 1} of {n}" in text
+    assert "Prepared by" in texts[0] and "Executive summary" in texts[0]
+    everything = "".join(texts)
+    assert str(ROOT) not in everything and str(out_dir) not in everything
+    assert "mvtk git commit" in everything and "../structures/smart_beam.toml" in everything
