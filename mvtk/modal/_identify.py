@@ -418,6 +418,11 @@ def window_tau(h) -> float | None:
     return None
 
 
+WINDOW_DOMINATED = 0.5
+"""A pole keeps its pLSCF estimate (no refinement) when the exponential window's added
+damping ``1 / (tau wn)`` exceeds this fraction of its windowed damping ratio."""
+
+
 def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True,
                      refine=True):
     """Refinement, LSFD on the selected poles and everything the result table needs."""
@@ -437,7 +442,17 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         ref = refine_poles(Hf[:, :, finite], f[finite], pole, kind, residuals=residuals,
                            max_nfev=50 if refine else 0)
         if refine:
-            pole, refined = ref.pole, ref.refined
+            pole, refined = ref.pole.copy(), ref.refined.copy()
+            tau_w = window_tau(h)
+            if tau_w is not None:
+                # where an exponential window adds most of a pole's damping, removing it
+                # multiplies any error of the windowed pole (x5 for 85 %): the refined
+                # continuous-time pole moved a roving-hammer test's mode-1 damping by
+                # +34 % against the truth where pLSCF's discrete-time pole was +6 %
+                z_pole = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1.0)
+                added = 1.0 / (tau_w * np.maximum(np.abs(pole), np.finfo(float).tiny))
+                keep = refined & (added > WINDOW_DOMINATED * z_pole)
+                pole[keep], refined[keep] = sel.pole[keep], False
         cov, noise = ref.covariance, ref.noise_std
     fn = np.abs(pole) / (2 * np.pi)
     zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
