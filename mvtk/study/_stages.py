@@ -820,7 +820,6 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
     spread over the edge nodes) is compared with it on the full FE model (static tip
     deflection per volt, ``actuator["tip_per_volt_*"]``).
     """
-    import xarray as xr
 
     from ..control._plant import dof_load, structural_plant
     from ..fe import PiezoPatch, build_model, edge_moment_load, modal_analysis, static_solve
@@ -900,17 +899,7 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
         act["plant_modes"] = n_plant
         act["plant_fn_max_hz"] = float(np.max(plant.meta["fn_hz"]))
         result["actuator"] = act
-        coords = list(plant.coords)
-        ds = xr.Dataset({
-            k: (("coord", "coord2"), getattr(plant, k)) for k in ("M", "C", "K")
-        } | {
-            "B": (("coord", "input"), plant.B),
-            "Cq": (("output", "coord"), plant.Cq),
-            "Cv": (("output", "coord"), plant.Cv),
-            "D": (("output", "input"), plant.D),
-        }, coords={"coord": coords, "coord2": coords, "input": list(plant.inputs),
-                   "output": list(plant.outputs)},
-            attrs={"moment_per_volt": act["moment_per_volt"]})
+        ds = _plant_dataset(plant, {"moment_per_volt": act["moment_per_volt"]})
         # the FE frequencies verify() compared (the same eigen solve as modal_analysis);
         # modal_analysis only where it would classify near-zero modes as rigid
         fe_hz = np.asarray(ver.modes.fe_hz, dtype=float)
@@ -925,8 +914,6 @@ def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
     on the super element with the electrodes' static shapes
     (:func:`mvtk.reduction.with_electrodes`)."""
     import dataclasses
-
-    import xarray as xr
 
     from ..control import piezo_plant
     from ..errors import MvtkError
@@ -968,8 +955,17 @@ def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
            "sensor_unit": plant.output_units[0],
            "plant_modes": n_plant, "plant_fn_max_hz": float(np.max(plant.meta["fn_hz"])),
            "emcc": emcc, "moment_per_volt": float("nan")}
+    ds = _plant_dataset(plant, {"moment_per_volt": float("nan"),
+                                "output_units": "|".join(plant.output_units)})
+    return act, ds
+
+
+def _plant_dataset(plant, attrs: dict):
+    """The second-order plant's matrices as the cached Dataset of the reduction stage."""
+    import xarray as xr
+
     coords = list(plant.coords)
-    ds = xr.Dataset({
+    return xr.Dataset({
         k: (("coord", "coord2"), getattr(plant, k)) for k in ("M", "C", "K")
     } | {
         "B": (("coord", "input"), plant.B),
@@ -977,10 +973,7 @@ def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
         "Cv": (("output", "coord"), plant.Cv),
         "D": (("output", "input"), plant.D),
     }, coords={"coord": coords, "coord2": coords, "input": list(plant.inputs),
-               "output": list(plant.outputs)},
-        attrs={"moment_per_volt": float("nan"),
-               "output_units": "|".join(plant.output_units)})
-    return act, ds
+               "output": list(plant.outputs)}, attrs=attrs)
 
 
 # ---------------------------------------------------------------------------- control
