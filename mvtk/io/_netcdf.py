@@ -110,6 +110,18 @@ def write(ds, path: str | os.PathLike) -> Path:
 _IN_MEMORY_BYTES = 256 * 2**20
 
 
+def _local_scheduler():
+    """Context in which dask (when imported) computes in this process (no cluster lock)."""
+    import contextlib
+    import sys
+
+    if "dask" not in sys.modules:
+        return contextlib.nullcontext()
+    import dask
+
+    return dask.config.set(scheduler="synchronous")
+
+
 def write_h5netcdf(ds: xr.Dataset, path: Path) -> Path:
     """Write ``ds`` to ``path`` as netCDF4 (h5netcdf), atomically.
 
@@ -121,7 +133,12 @@ def write_h5netcdf(ds: xr.Dataset, path: Path) -> Path:
     """
     nbytes = int(ds.nbytes)
     if nbytes <= _IN_MEMORY_BYTES:
-        return write_bytes(path, ds.to_netcdf(engine="h5netcdf"))   # a memoryview
+        # in memory: the data are loaded first and written by this process alone (under
+        # an active dask.distributed client xarray would otherwise take a cluster lock
+        # named after the in-memory buffer, which the scheduler does not know)
+        ds = ds.load()
+        with _local_scheduler():
+            return write_bytes(path, ds.to_netcdf(engine="h5netcdf"))   # a memoryview
     check_room(path, int(nbytes * 1.05) + 2**20)
     with atomic_path(path) as tmp:
         ds.to_netcdf(tmp, engine="h5netcdf")
