@@ -32,6 +32,8 @@ normal mode with its frequency and modal mass 1).
 
 from __future__ import annotations
 
+import os
+import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from .._atomic import atomic_path, write_text
+from .._atomic import atomic_path, write_error, write_text
 from ..errors import FormatError, MissingDependencyError, ParameterError
 from ._beam import BeamSection
 from ._general import BeamSet, ShellSet, assemble_model
@@ -389,7 +391,24 @@ def write_xdmf(model: FEModel, path: str | Path, result=None,
         raise ParameterError(f"XDMF file name must end in .xdmf or .xmf, got {path.name!r}")
     mesh = _export_mesh(model, result, fields)
     mesh.field_data = {}
-    mesh.write(path, file_format="xdmf")
+    # meshio writes the .xdmf and its .h5 under their final names (the .xdmf names the
+    # .h5); write both in a private folder beside the target, then move each file over
+    # its target in one step, so a failure leaves the previous pair as it was
+    folder = path.parent if str(path.parent) else Path(".")
+    heavy = path.with_suffix(".h5")
+    try:
+        scratch = tempfile.TemporaryDirectory(prefix=f".{path.name}.", dir=folder)
+    except OSError as err:
+        raise write_error(path, err) from err
+    with scratch as tmpdir:
+        with atomic_path(path) as tmp_xdmf:
+            try:
+                mesh.write(Path(tmpdir) / path.name, file_format="xdmf")
+            except OSError as err:
+                raise write_error(path, err) from err
+            with atomic_path(heavy) as tmp_h5:
+                os.replace(Path(tmpdir) / heavy.name, tmp_h5)
+            os.replace(Path(tmpdir) / path.name, tmp_xdmf)
     if result is not None:
         fn = np.asarray(result.fn_hz, dtype=float)
         rows = "".join(f"{k},{float(f)!r}\n" for k, f in enumerate(fn, start=1))

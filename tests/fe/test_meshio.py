@@ -231,6 +231,30 @@ def test_xdmf_export_round_trip_with_shells_and_beams(tmp_path):
         write_xdmf(model, tmp_path / "m.xdmf", fields={"bad": np.ones(3)})
 
 
+def test_xdmf_failure_leaves_the_previous_pair_unchanged(tmp_path, monkeypatch):
+    """The .xdmf and its .h5 are written in a private folder and moved over the old
+    pair only when both are complete: a writer failing half-way (here an OSError from
+    meshio) leaves the previous files byte-identical and no temporary file behind."""
+    import meshio
+
+    from mvtk.errors import OutputError
+
+    model = plate_model(0.3, 0.2, [Ply(STEEL, 1e-3)], nx=4, ny=3, clamp="x0")
+    res = modal_analysis(model, 2)
+    write_xdmf(model, tmp_path / "m.xdmf", res)
+    before = {p.name: p.read_bytes() for p in tmp_path.iterdir()}
+    assert set(before) == {"m.xdmf", "m.h5", "m.fn_hz.csv"}
+
+    def broken(self, path, *args, **kwargs):
+        Path(path).with_suffix(".h5").write_bytes(b"half")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(meshio.Mesh, "write", broken)
+    with pytest.raises(OutputError, match=r"m\.xdmf: could not be written: disk full"):
+        write_xdmf(model, tmp_path / "m.xdmf", modal_analysis(model, 3))
+    assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
 def test_matrix_market_round_trip_with_dof_table(tmp_path):
     import scipy.io
 
