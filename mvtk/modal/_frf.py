@@ -587,6 +587,12 @@ def frf_matrix(
                      df_hz=float(f0[1] - f0[0]), set_quality=quality.to_json())
     if policy is not None:
         out.attrs["window_policy"] = policy.reason
+    # record and FFT length (samples) when every set shares them: identify needs them
+    # to tell interpolated (zero-padded) lines from the record's own
+    for key in ("nperseg", "nfft"):
+        vals = {int(p[2][key]) for p in parts if key in p[2]}
+        if len(vals) == 1 and all(key in p[2] for p in parts):
+            out.attrs[key] = vals.pop()
     taus = {float(p[2]["exponential_window_tau_s"]) for p in parts
             if "exponential_window_tau_s" in p[2]}
     if len(taus) == 1 and len(parts) == sum("exponential_window_tau_s" in p[2]
