@@ -416,7 +416,8 @@ def frf_matrix(
         strongly each line was excited; :func:`identify` marks modes it missed) and
         ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``,
         ``exponential_window_tau_s`` (s, the window every set shares, when one was
-        applied: its damping ``1/(tau omega_n)`` is in every pole), ``window_policy``
+        applied: its damping ``1/(tau omega_n)`` is in every pole), ``nperseg`` and
+        ``nfft`` (samples, when every set shares them), ``window_policy``
         (impact) and ``set_quality``: the per-set quality table (double hits, clipped
         channels, coherence, excitation level; :func:`mvtk.signal.set_quality` reads it
         as a :class:`mvtk.signal.SetQuality`). A ``pair_quality`` coordinate

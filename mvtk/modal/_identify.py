@@ -376,15 +376,22 @@ def identify(
         force hardly excited: ``excitation_db``, the reference autospectrum at ``fn`` re
         its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
         -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
-        coordinate, e.g. UFF 58 FRFs), complex
+        coordinate, e.g. UFF 58 FRFs), a mode only the FRFs of flagged sets need
+        (``support`` < 2 on the FRFs whose ``pair_quality`` is empty: a clipped force,
+        a cut double hit), an exponential window's damping above ``MAX_WINDOW_FRACTION``
+        (90 %) of the identified one, a windowed mode still above ``MAX_TRUNCATION``
+        (1 %) of its amplitude at the end of a zero-padded record), complex
         and real shapes at the response DOFs from the residues of all references
         (mass-normalised when driving points exist), synthesised FRFs and their
         correlation with the measured ones; ``fn_std_hz``, ``zeta_std`` and
         ``shape_std``: first-order standard deviations from the FRF noise (the fit
-        residual of each FRF). When the FRFs carry ``attrs["exponential_window_tau_s"]``
-        (or ``exp_window_tau_s``) the damping the window added, ``1 / (tau w_n)``, is
-        removed from every pole (:func:`mvtk.signal.exponential_window_correction`) and
-        stated in the ``zeta_window`` column and ``window_tau_s``.
+        residual of each FRF; on zero-padded lines, ``attrs["nfft"] > attrs["nperseg"]``,
+        the variances are multiplied by ``nfft / nperseg``: the lines interpolate
+        ``nperseg / 2`` independent ones). When the FRFs carry
+        ``attrs["exponential_window_tau_s"]`` (or ``exp_window_tau_s``) the damping the
+        window added, ``1 / (tau w_n)``, is removed from every pole
+        (:func:`mvtk.signal.exponential_window_correction`) and stated in the
+        ``zeta_window`` column and ``window_tau_s``.
 
     Raises
     ------
