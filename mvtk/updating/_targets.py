@@ -312,7 +312,8 @@ def targets_from_shapes(
         Per-mode identification quality (the ``mvtk.modal`` table), indexed by mode or
         with a ``mode`` column; ``mpc`` (0..1) and ``reliable`` (bool) are used: the
         weight of a target is its ``mpc`` (1 when absent or NaN), 0 when not
-        ``reliable`` or when ``mpc < min_mpc``.
+        ``reliable`` or when ``mpc < min_mpc``; ``fn_std_hz`` (when present and finite)
+        becomes the target's ``std_hz``.
     min_mpc : float
     labels : sequence of str, optional
 
@@ -343,6 +344,7 @@ def targets_from_shapes(
         vals = np.array([np.real(v * np.exp(-0.5j * np.angle(np.sum(v * v)))) for v in vals])
     modes = shapes["mode"].values
     w = np.ones(len(modes))
+    std = np.full(len(modes), np.nan)
     if quality is not None:
         q = quality.set_index("mode") if "mode" in getattr(quality, "columns", ()) else quality
         for k, m in enumerate(modes):
@@ -354,6 +356,8 @@ def targets_from_shapes(
                 w[k] = float(row["mpc"]) if float(row["mpc"]) >= min_mpc else 0.0
             if "reliable" in q.columns and not bool(row["reliable"]):
                 w[k] = 0.0
+            if "fn_std_hz" in q.columns:
+                std[k] = float(row["fn_std_hz"])
     if labels is not None and len(labels) != len(modes):
         raise DimensionError(f"expected {len(modes)} labels, got {len(labels)}")
     dof_labels = [str(d) for d in shapes["dof"].values]
@@ -362,6 +366,7 @@ def targets_from_shapes(
             float(shapes["fn_hz"].values[k]), weight=float(w[k]),
             label=labels[k] if labels is not None else f"mode {modes[k]}",
             shape={"values": vals[k], "observation": C, "labels": dof_labels},
+            std_hz=float(std[k]) if np.isfinite(std[k]) else None,
         )
         for k in range(len(modes))
     ]

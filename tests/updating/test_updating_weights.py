@@ -53,7 +53,7 @@ def _fit(f, std_rel, params, model_form_std=0.0, start=None):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         return update(start or {**TRUTH, "k": 1.3}, params, targets, builder=chain,
-                      model_form_std=model_form_std, n_modes=3, difference="forward")
+                      model_form_std=model_form_std, n_modes=3, affine=True)
 
 
 def test_one_parameter_std_is_the_closed_form_and_the_monte_carlo_scatter():
@@ -63,7 +63,7 @@ def test_one_parameter_std_is_the_closed_form_and_the_monte_carlo_scatter():
     params = [Parameter("k", lower=0.1, upper=10.0)]
     exact = 2.0 / np.sqrt(np.sum(1 / s**2))  # std of ln k, closed form
     est, pred, verdicts = [], [], []
-    for _ in range(200):
+    for _ in range(120):  # sample std within about +-6.5 % (1 sigma) of the truth
         r = _fit(f0 * (1 + s * rng.standard_normal(3)), s, params)
         est.append(r.values[0])
         pred.append(r.std[0] / r.values[0])
@@ -76,6 +76,7 @@ def test_one_parameter_std_is_the_closed_form_and_the_monte_carlo_scatter():
     assert 0.91 <= verdicts.count("noise") / len(verdicts) <= 0.99
 
 
+@pytest.mark.slow
 def test_two_parameters_std_matches_monte_carlo_and_weights_follow_the_variances():
     rng = np.random.default_rng(7)
     f0 = chain_fn(TRUTH)
@@ -144,6 +145,15 @@ def test_targets_from_modal_result_carry_fn_std_and_bad_std_is_refused():
                                                 "fn_std_hz": [0.01, np.nan]}))
     assert [x.std_hz for x in t] == [0.01, None]
     assert targets_from_modal_result({"fn_hz": [5.0]})[0].std_hz is None
+    import xarray as xr
+
+    from mvtk.updating import targets_from_shapes
+
+    shapes = xr.DataArray(np.eye(3)[:2] + 0.1, dims=("mode", "dof"),
+                          coords={"mode": [1, 2], "fn_hz": ("mode", [10.0, 20.0])})
+    q = pd.DataFrame({"mode": [1, 2], "fn_std_hz": [0.02, np.nan]})
+    t = targets_from_shapes(shapes, np.eye(3), quality=q)
+    assert [x.std_hz for x in t] == [0.02, None]
     with pytest.raises(ParameterError, match="std_hz must be a finite number >= 0"):
         FrequencyTarget(10.0, std_hz=-1.0)
     with pytest.raises(ParameterError, match=r"\['f1'\] have a zero standard deviation"):
