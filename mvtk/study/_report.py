@@ -1068,6 +1068,13 @@ def _stage_warnings(res: StudyResult) -> list[str]:
                 out.append(f"updating: {name} ended at a bound of its range")
         if up.get("identifiable") is False:
             out.append("updating: the parameters are not identifiable from the targets")
+        rows = (up.get("summary") or {}).get("residuals") or []
+        beyond = [r.get("target", f"f{i + 1}") for i, (r, v) in
+                  enumerate(zip(rows, up.get("residual_verdict") or [])) if v == "model form"]
+        if beyond:
+            out.append(f"updating: the residual of {', '.join(beyond)} is beyond noise and "
+                       "the model-form term (model form: the model lacks something no "
+                       "updated value supplies)")
     return list(dict.fromkeys(out))
 
 
