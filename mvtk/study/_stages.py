@@ -462,7 +462,10 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
 
     ``S = d ln f / d ln p`` (targets x free parameters, :attr:`UpdateResult.sensitivity`)
     is the Jacobian of the log-frequencies in log-parameters: ``S'S`` is the Fisher
-    matrix for a uniform relative frequency error. The update is *identifiable* when
+    matrix for a uniform relative frequency error, ``S'WS`` for targets of relative
+    standard deviations ``s_i`` (``W = diag(s_min^2 / s_i^2)``, the update's weights
+    scaled to 1 for the best-known target: equal standard deviations give ``S'S``); its
+    rows are weighted so. The update is *identifiable* when
     :func:`mvtk.updating.update` found no null direction, no parameter ended on a bound,
     and ``cond(S) = s_max / s_min <= cond_max`` (a relative frequency error ``e`` moves
     the weakest parameter combination by up to ``cond(S) e / s_max``). Otherwise the
@@ -478,6 +481,11 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
         (str, empty when identifiable) and ``identifiable_combination`` (str).
     """
     S = np.asarray(res.sensitivity, dtype=float)
+    sd = getattr(res, "target_std_hz", None)
+    if sd is not None and S.ndim == 2:
+        rel = np.asarray(sd, dtype=float) / np.array([t.fn_hz for t in res.targets])
+        if rel.size == S.shape[0] and np.all(np.isfinite(rel) & (rel > 0)):
+            S = S * (rel.min() / rel)[:, None]
     free = [p for p, prm in zip(paths, res.parameters) if not prm.fixed]
     at_bound = [p for p, b in zip(paths, np.asarray(res.at_bound, bool)) if b]
     why = []

@@ -46,3 +46,25 @@ def test_a_model_form_verdict_is_listed_among_the_stage_warnings():
     notes = [n for n in _stage_warnings(res) if "model-form term" in n]
     assert notes == ["updating: the residual of f2 is beyond noise and the model-form term "
                      "(model form: the model lacks something no updated value supplies)"]
+
+
+def test_identifiability_weights_the_log_sensitivities_by_the_target_stds():
+    from mvtk.study._stages import identifiability
+
+    S = np.array([[0.5, 0.2], [0.5, 0.21], [0.5, 0.6]])
+    prm = [SimpleNamespace(fixed=False), SimpleNamespace(fixed=False)]
+    targets = [FrequencyTarget(f) for f in (10.0, 20.0, 30.0)]
+
+    def res(std_hz):
+        return SimpleNamespace(sensitivity=S, parameters=prm, at_bound=[False, False],
+                               identifiable=True, targets=targets,
+                               target_std_hz=np.asarray(std_hz, dtype=float))
+
+    equal = identifiability(res([0.05, 0.1, 0.15]), ["a", "b"], 100.0)  # 0.5 % each
+    unweighted = identifiability(res([np.nan] * 3), ["a", "b"], 100.0)
+    assert equal["log_condition_number"] == unweighted["log_condition_number"]
+    # the only target that separates a from b is 100x less certain: the Fisher matrix
+    # S'WS is near-singular and the verdict says so
+    weak = identifiability(res([0.05, 0.1, 15.0]), ["a", "b"], 100.0)
+    assert weak["log_condition_number"] > 10 * equal["log_condition_number"]
+    assert not weak["identifiable_study"] and equal["identifiable_study"]
