@@ -975,6 +975,16 @@ def _model_form_text(res: StudyResult) -> str | None:
         parts.append(f"The same modes identified independently from the multi-point test "
                      f"differ from the targets by at most {scatter.max():.2g} %.")
     std = np.asarray(up["std"], dtype=float)
+    cov = np.asarray(up.get("covariance") or [[]], dtype=float)
+    if cov.ndim == 2 and cov.shape[0] >= 2 and np.isfinite(cov).all():
+        d = np.sqrt(np.diag(cov))
+        names = [p for p, s in zip(up["parameters"], std) if np.isfinite(s)]
+        if d.all() and len(names) == cov.shape[0]:
+            rho = cov / np.outer(d, d)
+            pairs = [f"{names[i]} / {names[j]} {rho[i, j]:+.2f}"
+                     for i in range(len(names)) for j in range(i + 1, len(names))]
+            parts.append("Correlation of the updated parameters (from their covariance "
+                         "(J' W J)^-1): " + ", ".join(pairs) + ".")
     if np.isfinite(std).any():
         parts.append("The parameter standard deviations (from the Jacobian and the "
                      "targets' standard deviations) describe the scatter of the fit, not the "

@@ -1001,6 +1001,10 @@ class UpdateResult:
             "timing": {k: clean(v) for k, v in self.timing.items()},
             "updated_values": {p.path: float(v) for p, v in zip(self.parameters, self.values)},
             "reduced_basis": deep(self.meta.get("reduced_basis", {"used": False})),
+            "covariance": {
+                "parameters": [p.path for p in self.parameters if not p.fixed],
+                "matrix": [[clean(float(v)) for v in row]
+                           for row in np.asarray(self.covariance, dtype=float)]},
             "weighting": self.meta.get("weighting", "weights"),
             "model_form_std": clean(self.meta.get("model_form_std")),
             "variance_factor": clean(self.meta.get("variance_factor", math.nan)),
