@@ -665,7 +665,11 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.table(prm, "updating_parameters",
                   f"Updated parameters ({up['n_evaluations']} evaluations, "
                   f"condition number {up['condition_number']:.3g}, "
-                  f"identifiable: {up['identifiable']})", passed_column=None)
+                  f"identifiable: {up['identifiable']}; parameter std: "
+                  f"{up.get('covariance_scaling') or 'a posteriori (residual variance)'})",
+                  passed_column=None)
+        if up.get("residual_verdict"):
+            _updating_residuals(sec, up)
         for w in up.get("warnings", []):
             sec.note(w, kind="unavailable")
     elif "updating" in res.failed or "updating" in res.unavailable:
@@ -906,6 +910,41 @@ def _png(b64: str) -> bytes:
     return base64.b64decode(b64)
 
 
+#: How the report's text counts the updating residual verdicts.
+_VERDICT_TEXT = {"noise": "within identification noise",
+                 "model-form term": "explained by the model-form term",
+                 "model form": "model form (beyond noise and the model-form term)",
+                 "no redundancy": "not testable (no redundancy)"}
+
+
+def _updating_residuals(sec, up: dict) -> None:
+    """The updating residuals with their standard deviations and noise/model-form verdicts."""
+    n = len(up["targets_hz"])
+    rows = (up.get("summary") or {}).get("residuals") or [{}] * n
+    labels = [r.get("target", f"f{i + 1}") for i, r in enumerate(rows)]
+    tab = pd.DataFrame({
+        "target": labels, "target_hz": up["targets_hz"], "updated_hz": up["fn_hz"],
+        "residual_hz": up["residual_hz"],
+        "identification_std_hz": up["identification_std_hz"],
+        "std from": up.get("target_std_source") or [""] * n,
+        "std_hz": up["target_std_hz"],
+        "noise_limit_hz": up["noise_limit_hz"],
+        "model_form_limit_hz": up["limit_hz"],
+        "verdict": up["residual_verdict"]})
+    mf = up.get("model_form_std")
+    term = (f"a model-form term of {100 * mf:.3g} % of the frequency" if mf is not None
+            else "no model-form term")
+    sec.table(tab, "updating_residuals",
+              "Updating residuals against their standard deviations: std = identification "
+              f"std combined with {term}, each target weighted by 1/std^2; the limits are "
+              "twice the residual's standard deviation after the fit (noise alone; noise "
+              "and the model-form term). Verdict: noise (within the noise limit), "
+              "model-form term (explained by the stated model-form term), model form "
+              "(beyond both: the model lacks something no updated value supplies), "
+              "no redundancy (as many parameters as targets fit it exactly)",
+              passed_column=None)
+
+
 def _model_form_text(res: StudyResult) -> str | None:
     """What updating explains and what it cannot: residuals vs identification scatter."""
     up = res.results.get("updating")
@@ -916,20 +955,40 @@ def _model_form_text(res: StudyResult) -> str | None:
     resid = 100 * np.abs(f_up / f_t - 1)
     parts = [f"After updating {len(up['parameters'])} parameter(s) against {len(f_t)} "
              f"target frequencies the residual is {resid.min():.2g}-{resid.max():.2g} %."]
+    verdicts = list(up.get("residual_verdict") or [])
+    counted = {v: verdicts.count(v) for v in ("noise", "model-form term", "model form",
+                                              "no redundancy") if v in verdicts}
     mod = res.results.get("modal")
-    if mod:
+    if counted:
+        vf = up.get("variance_factor")
+        parts.append(
+            "Against the targets' standard deviations (identification and model-form "
+            "term, table below): "
+            + ", ".join(f"{v} {_VERDICT_TEXT[k]}" for k, v in counted.items()) + "."
+            + (f" The variance factor chi^2 / (m - n) = {vf:.3g} tests the stated "
+               "standard deviations (about 1 when they describe the residuals)."
+               if vf is not None and np.isfinite(vf) else ""))
+    elif mod:
         fn_id = np.asarray(mod["table"]["fn_hz"], dtype=float)
         near = [fn_id[np.argmin(np.abs(fn_id - f))] for f in f_t]
         scatter = 100 * np.abs(np.asarray(near) / f_t - 1)
         parts.append(f"The same modes identified independently from the multi-point test "
-                     f"differ from the targets by at most {scatter.max():.2g} %: the "
-                     "identification uncertainty of a frequency is far below the residual, so "
-                     "the residual is model-form error (what no value of the updated "
-                     "parameters can remove), not measurement noise.")
+                     f"differ from the targets by at most {scatter.max():.2g} %.")
     std = np.asarray(up["std"], dtype=float)
+    cov = np.asarray(up.get("covariance") or [[]], dtype=float)
+    if cov.ndim == 2 and cov.shape[0] >= 2 and np.isfinite(cov).all():
+        d = np.sqrt(np.diag(cov))
+        names = [p for p, s in zip(up["parameters"], std) if np.isfinite(s)]
+        if d.all() and len(names) == cov.shape[0]:
+            rho = cov / np.outer(d, d)
+            pairs = [f"{names[i]} / {names[j]} {rho[i, j]:+.2f}"
+                     for i in range(len(names)) for j in range(i + 1, len(names))]
+            parts.append("Correlation of the updated parameters (from their covariance "
+                         "(J' W J)^-1): " + ", ".join(pairs) + ".")
     if np.isfinite(std).any():
-        parts.append("The parameter standard deviations (from the Jacobian and the residual "
-                     "variance) describe the scatter of the fit, not the bias that the "
+        parts.append("The parameter standard deviations (from the Jacobian and the "
+                     "targets' standard deviations) describe the scatter of the fit, not the "
+                     "bias that the "
                      "model-form error puts on the parameters: an updated parameter can be "
                      "several standard deviations from the specimen's own value.")
     return " ".join(parts)
@@ -1019,6 +1078,13 @@ def _stage_warnings(res: StudyResult) -> list[str]:
                 out.append(f"updating: {name} ended at a bound of its range")
         if up.get("identifiable") is False:
             out.append("updating: the parameters are not identifiable from the targets")
+        rows = (up.get("summary") or {}).get("residuals") or []
+        beyond = [r.get("target", f"f{i + 1}") for i, (r, v) in
+                  enumerate(zip(rows, up.get("residual_verdict") or [])) if v == "model form"]
+        if beyond:
+            out.append(f"updating: the residual of {', '.join(beyond)} is beyond noise and "
+                       "the model-form term (model form: the model lacks something no "
+                       "updated value supplies)")
     return list(dict.fromkeys(out))
 
 

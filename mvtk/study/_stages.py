@@ -462,7 +462,10 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
 
     ``S = d ln f / d ln p`` (targets x free parameters, :attr:`UpdateResult.sensitivity`)
     is the Jacobian of the log-frequencies in log-parameters: ``S'S`` is the Fisher
-    matrix for a uniform relative frequency error. The update is *identifiable* when
+    matrix for a uniform relative frequency error, ``S'WS`` for targets of relative
+    standard deviations ``s_i`` (``W = diag(s_min^2 / s_i^2)``, the update's weights
+    scaled to 1 for the best-known target: equal standard deviations give ``S'S``); its
+    rows are weighted so. The update is *identifiable* when
     :func:`mvtk.updating.update` found no null direction, no parameter ended on a bound,
     and ``cond(S) = s_max / s_min <= cond_max`` (a relative frequency error ``e`` moves
     the weakest parameter combination by up to ``cond(S) e / s_max``). Otherwise the
@@ -478,6 +481,11 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
         (str, empty when identifiable) and ``identifiable_combination`` (str).
     """
     S = np.asarray(res.sensitivity, dtype=float)
+    sd = getattr(res, "target_std_hz", None)
+    if sd is not None and S.ndim == 2:
+        rel = np.asarray(sd, dtype=float) / np.array([t.fn_hz for t in res.targets])
+        if rel.size == S.shape[0] and np.all(np.isfinite(rel) & (rel > 0)):
+            S = S * (rel.min() / rel)[:, None]
     free = [p for p, prm in zip(paths, res.parameters) if not prm.fixed]
     at_bound = [p for p, b in zip(paths, np.asarray(res.at_bound, bool)) if b]
     why = []
@@ -533,76 +541,55 @@ def _normal_mode_shapes(study: Study, targets: list, attached: list, modal_resul
 def updating(study: Study, modal_arrays=None, modal_result=None):
     """Sensitivity-based update of the configured parameters to the target frequencies.
 
-    Reads ``[updating]``: ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables,
-    ``parameters`` (a field absent from the structure is created with ``initial``) and
-    the solver settings (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``,
-    ``frequency_std``, ``builder``). With a ``[modal]`` test (``modal_arrays``, the
+    Reads ``[updating]`` through :func:`mvtk.study._updating.updating_inputs`:
+    ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables, ``parameters`` (a field
+    absent from the structure is created with ``initial``) and the solver settings
+    (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``, ``frequency_std``,
+    ``model_form_std``, ``builder``). With a ``[modal]`` test (``modal_arrays``, the
     identified shapes) and ``modal.pair_updating``, each target carries the identified
-    shape nearest in frequency, so the FE modes are paired by MAC.
+    shape nearest in frequency, so the FE modes are paired by MAC; with its mode table
+    (``modal_result``) each target carries the identified ``fn_std_hz`` as its
+    standard deviation, and the update weights the targets by ``1 / sigma^2`` with the
+    model-form term ``model_form_std`` (:func:`mvtk.updating.update`).
     """
-    from ..updating import FrequencyTarget, Parameter, update
-    from ._updating import create_missing, import_builder
+    from ..updating import update
+    from ._updating import updating_inputs
 
     cfg = study.section("updating")
-    desc = study.description()
-    params = []
-    for i, p in enumerate(cfg["parameters"]):
-        where = f"updating.parameters[{i}]"
-        if p.get("initial") is not None:
-            # a field absent from the nominal description (e.g. an elastic clamp) starts
-            # at the configured value
-            create_missing(desc, p["path"], p["initial"], where)
-        params.append(Parameter.from_dict({k: v for k, v in p.items() if v is not None},
-                                          where))
-    if cfg.get("targets_hz") is not None:
-        targets = [FrequencyTarget(float(f), label=f"f{i + 1}")
-                   for i, f in enumerate(cfg["targets_hz"])]
-    else:
-        targets = [FrequencyTarget.from_dict(dict(t), f"updating.targets[{i}]")
-                   for i, t in enumerate(cfg["targets"])]
-    attached = [None] * len(targets)
-    modal_cfg = study.section("modal")
-    builder = import_builder(cfg["builder"]) if cfg.get("builder") is not None else None
-    if builder is None:
-        from ..fe import build_model as builder_or_default
-    else:
-        builder_or_default = builder
-    nominal_model = None
-    dropped: list[str] = []
-    if modal_arrays is not None and modal_cfg is not None and modal_cfg["pair_updating"]:
-        from ._ema import shape_targets
-
-        nominal_model = builder_or_default(desc)
-        targets, attached = shape_targets(study, targets, modal_arrays, nominal_model)
-        targets, attached, dropped = _normal_mode_shapes(study, targets, attached,
-                                                         modal_result)
-    targets, pairing_table = pair_targets(desc, targets, builder_or_default, nominal_model)
-    kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
-              if cfg.get(k) is not None}
-    if builder is not None:
-        kwargs["builder"] = builder
-    else:
-        kwargs["affine"] = _affine_parameters(desc, [p.path for p in params])
+    inp = updating_inputs(study, modal_arrays, modal_result)
+    params, targets, kwargs = inp["parameters"], inp["targets"], inp["kwargs"]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = update(desc, params, targets, max_iter=int(cfg.get("max_iter", 30)), **kwargs)
+        res = update(inp["description"], params, targets, **kwargs)
+    table = res.residual_table()
     result = {
         "success": bool(res.success), "message": str(res.message),
         "affine": bool(kwargs.get("affine", False)),
         "affine_check_rel": res.meta.get("affine_check_rel"),
         "parameters": [p.path for p in params],
         "initial_values": res.initial_values, "values": res.values, "std": res.std,
+        "covariance": np.asarray(res.covariance, dtype=float).tolist(),
+        "covariance_scaling": res.meta.get("covariance_scaling"),
         "at_bound": res.at_bound,
         "targets_hz": [float(t.fn_hz) for t in targets],
-        "target_test_modes": attached,
+        "target_test_modes": inp["attached"],
+        "target_std_source": inp["std_source"],
+        "identification_std_hz": table["id_std_hz"].to_numpy(dtype=float),
+        "target_std_hz": table["std_hz"].to_numpy(dtype=float),
+        "model_form_std": res.meta.get("model_form_std"),
+        "residual_hz": table["residual_hz"].to_numpy(dtype=float),
+        "noise_limit_hz": table["noise_limit_hz"].to_numpy(dtype=float),
+        "limit_hz": table["limit_hz"].to_numpy(dtype=float),
+        "residual_verdict": list(res.verdicts),
+        "variance_factor": res.meta.get("variance_factor"),
         "pairing": list(res.pairing_method),
         "mac": [float(v) for v in np.asarray(res.mac, dtype=float)],
         "fn_hz_initial": res.fn_hz_initial, "fn_hz": res.fn_hz,
         "modes": res.modes, "model_fn_hz": res.model_fn_hz,
         "model_kinds": list(res.model_kinds),
         "identifiable": bool(res.identifiable), "condition_number": res.condition_number,
-        "nominal_pairing": pairing_table,
-        "shapes_not_used": dropped,
+        "nominal_pairing": inp["pairing_table"],
+        "shapes_not_used": inp["shapes_not_used"],
         **identifiability(res, [p.path for p in params], float(cfg["identifiability_cond_max"])),
         "n_evaluations": res.n_evaluations,
         "description": res.description,
