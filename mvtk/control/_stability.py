@@ -425,6 +425,11 @@ def loop_margins(plant, controller, design_plant=None, *,
     LoopMargins
     """
     law = _law(controller, plant, design_plant)
+    if len(law.actuator_indices) > 1:
+        raise ParameterError(
+            f"loop_margins: the law drives {len(law.actuator_indices)} inputs; gain and "
+            "phase margins are those of a loop broken at one input (use "
+            "closed_loop_stability for the multi-input loop)")
     A, b, c = law.loop()
 
     def stable_at(k: float) -> bool:
