@@ -79,3 +79,40 @@ def test_init_template_of_a_mesh_offers_piezo_patches(tmp_path):
     (tmp_path / "structure.toml").write_text("\n".join(lines))
     cp = piezo_coupling(build_model(tmp_path / "structure.toml"))
     assert cp.names == ("pzt",) and cp.C[0] > 0
+
+
+class _Study:
+    def __init__(self, control):
+        self._c = control
+
+    def section(self, name):
+        return self._c if name == "control" else None
+
+
+@pytest.mark.parametrize("ctrl, key", [
+    ({"name": "P", "type": "PPF", "f_hz": 10.0, "zeta_f": 0.1, "gain": 0.5,
+      "sensor": "Q:nope"}, "control.controllers['P'].sensor"),
+    ({"name": "P", "type": "PPF", "f_hz": 10.0, "zeta_f": 0.1, "gain": 0.5,
+      "actuator": "b"}, "control.controllers['P'].actuator"),
+    ({"name": "L", "type": "LQR", "R": 1.0, "actuators": ["a", "b"]},
+     "control.controllers['L'].actuators"),
+])
+def test_controller_inputs_and_outputs_are_checked_against_the_plant(ctrl, key):
+    """A controller naming an actuator or sensor the plant does not have: one-line
+    error naming the key and the plant's names."""
+    import numpy as np
+
+    from mvtk.control import StructuralPlant
+    from mvtk.study._stages import _plant_dataset, control
+
+    K, M = np.diag([4e3, 9e4]), np.eye(2)
+    plant = StructuralPlant(M, 0.01 * K / 30, K, np.array([[1.0], [0.5]]),
+                            np.array([[1.0, 0.2], [1.0, 1.0]]), np.zeros((2, 2)),
+                            inputs=["a"], outputs=["Q:sen", "tip"], coords=["m1", "m2"],
+                            input_units=["V"], output_units=["C", "m"])
+    ds = _plant_dataset(plant, {"moment_per_volt": float("nan"), "output_units": "C|m"})
+    cfg = {"initial_tip_displacement_m": 1e-4, "t_end_s": 1.5, "fs_out": 500.0,
+           "settle_band": 0.05, "controllers": [ctrl]}
+    with pytest.raises(ConfigError) as err:
+        control(_Study(cfg), ds, 10.0)
+    assert key in str(err.value) and "\n" not in str(err.value)
