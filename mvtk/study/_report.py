@@ -828,12 +828,17 @@ def _section_control(rep: Report, res: StudyResult) -> None:
     if act and act.get("piezo"):
         caps = ", ".join(f"{k} {1e9 * v:.4g} nF" for k, v in act["capacitance_F"].items())
         sec.text(
-            f"Piezo electrodes coupled in the shells (mvtk.fe.piezo_coupling): actuator "
-            f"'{act['name']}' (input, V), sensor(s) {', '.join(act['sensors'])} read as "
+            "Piezo electrodes coupled in the shells (mvtk.fe.piezo_coupling): "
+            + (f"actuator '{act['name']}' (input, V)" if len(act.get("actuators", [])) < 2
+               else f"actuators {', '.join(act['actuators'])} (inputs, V; a controller "
+               f"drives '{act['name']}' unless it names others, the static deflection "
+               "below is its)")
+            + f", sensor(s) {', '.join(act['sensors'])} read as "
             f"{act['sensing']} (the controllers' measurement is the first one, "
             f"{act['sensor_unit']}); blocked capacitances {caps}. The super element keeps "
-            "each electrode's static shape (mvtk.reduction.with_electrodes), so the "
-            "voltage-to-sensor feed-through of the collocated pair is kept. Static tip "
+            "each electrode's static shape and a block of residual inertia vectors "
+            "(mvtk.reduction.with_electrodes), so the voltage-to-sensor feed-through of "
+            "the collocated pair is kept. Static tip "
             f"deflection per volt: {1e6 * act['tip_per_volt_full_m']:.4g} um/V on the full "
             f"FE model, {1e6 * act['tip_per_volt_plant_m']:.4g} um/V from the plant "
             f"({act['plant_modes']} eigenmodes up to {act['plant_fn_max_hz']:.0f} Hz plus "
@@ -879,7 +884,11 @@ def _section_control(rep: Report, res: StudyResult) -> None:
              "at t = 0. Peak voltage in V and the equivalent edge moment in N m; closed-loop "
              "zeta of the linear controllers is the small-signal one (command below the "
              "limit). Settling time: after it the tip displacement stays "
-             f"within {100 * c['settle_band']:g} % of its initial amplitude."
+             f"within {100 * c['settle_band']:g} % of its initial amplitude. Gain and "
+             "phase margins: the loop broken at the actuator input "
+             "(mvtk.control.loop_margins), with the factor on the loop gain at the edge of "
+             "stability; – where there is none (open loop, a multi-input or nonlinear law, no "
+             "crossover)."
              + (f" {', '.join(lyap)}: the velocity form of the Lyapunov controller with a "
                 "boundary layer (mvtk.control.LyapunovBangBang); being nonlinear it has no "
                 "closed-loop poles (zeta shown as –)." if lyap else ""))

@@ -227,7 +227,11 @@ _CTRL_COMMON = {
     "name": Key("str", "Name of the controller in tables (unique, not 'open loop').",
                 REQUIRED),
     "type": Key("str", "Control law.", REQUIRED,
-                choices=("PPF", "SRF", "LyapunovBangBang", "VelocityFeedback")),
+                choices=("PPF", "SRF", "LyapunovBangBang", "VelocityFeedback", "LQR")),
+    "actuator": Key("str", "Plant input driven (a name of control.actuators; None: the "
+                    "first).", None),
+    "sensor": Key("str", "Plant output measured, e.g. 'Q:<electrode>' (None: the first "
+                  "sensor).", None),
     "u_max": _pos("Actuator limit: the command is clipped to +-u_max (None: no limit).",
                   None, "V"),
     "method": Key("str", "Simulation method (mvtk.control.simulate).", "auto",
@@ -250,6 +254,15 @@ CONTROLLER_SCHEMAS = {
     "VelocityFeedback": Table("Direct velocity feedback u = -g v.",
                               {**_CTRL_COMMON, "gain": Key("number", "Gain (V s/m).",
                                                            REQUIRED, minimum=0.0)}),
+    "LQR": Table(
+        "Linear-quadratic regulator u = -K x on one or several actuators (full state, "
+        "energy weighting x'Qx = twice the mechanical energy).",
+        {**{k: v for k, v in _CTRL_COMMON.items() if k not in ("actuator", "sensor")},
+         "R": _pos("Weight of the squared command against the energy weighting.",
+                   units="J/V^2"),
+         "q_scale": _pos("Factor on the energy weighting Q.", 1.0),
+         "actuators": Key("strings", "Plant inputs driven (names of control.actuators; "
+                          "None: the first).", None, min_length=1)}),
     "LyapunovBangBang": Table(
         "Lyapunov (bang-bang) control u = -u_max sign(B' dq/dt) with a boundary layer.",
         {**_CTRL_COMMON,
@@ -428,8 +441,9 @@ SCHEMA: dict[str, Table] = {
                                "piezo electrodes).", None, length=2),
          "sensor_node": Key("str", "Retained node of the tip sensor (uz).", REQUIRED),
          "actuators": Key("strings", "Piezo patches or electrodes driven by the controllers "
-                          "(mvtk.fe.piezo_coupling on any shell structure); the plant "
-                          "input is the first one's voltage.", None, min_length=1),
+                          "(mvtk.fe.piezo_coupling on any shell structure); each one's "
+                          "voltage is a plant input, the first one is the controllers' "
+                          "default.", None, min_length=1),
          "sensors": Key("strings", "Piezo patches or electrodes read by the controllers "
                         "(charge or voltage, see 'sensing'); the first one is the "
                         "controllers' measurement.", None, min_length=1),

@@ -896,10 +896,11 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
 
 
 def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
-    """Plant of piezo electrodes on any shell structure: the first actuator's voltage in,
-    the sensors' charge or voltage and the sensor node's displacement (``"tip"``) out,
-    on the super element with the electrodes' static shapes
-    (:func:`mvtk.reduction.with_electrodes`)."""
+    """Plant of piezo electrodes on any shell structure: every actuator's voltage in
+    (``control.actuators``, in order), the sensors' charge or voltage and the sensor
+    node's displacement (``"tip"``) out, on the super element with the electrodes'
+    static shapes and residual inertia vectors (:func:`mvtk.reduction.with_electrodes`).
+    The DC gains reported are those of the first actuator."""
     import dataclasses
 
     from ..control import piezo_plant
@@ -925,14 +926,14 @@ def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
     se_e, _ = with_electrodes(se, cp)
     tip = named[ctl["sensor_node"]]
     n_plant = min(int(cfg.get("plant_modes", 12)), se_e.n_dof)
-    plant = piezo_plant(se_e, cp, acts[:1], sens, sensing=ctl.get("sensing", "charge"),
+    plant = piezo_plant(se_e, cp, acts, sens, sensing=ctl.get("sensing", "charge"),
                         points=[(tip, "uz")], form="modal", n_modes=n_plant,
                         static_correction=True, **damp)
     plant = dataclasses.replace(plant, outputs=plant.outputs[:-1] + ("tip",))
     i_a = cp.names.index(acts[0])
     w_full = float(model.expand(static_solve(model, cp.B[:, i_a]))[tip, 2])
     emcc = [r for r in modal_emcc(model, cp, n_modes=min(6, model.n_dof - 1),
-                                  electrodes=acts[:1] + [n for n in sens if n != acts[0]])]
+                                  electrodes=acts + [n for n in sens if n not in acts])]
     act = {"piezo": True, "name": acts[0], "actuators": acts, "sensors": sens,
            "sensing": ctl.get("sensing", "charge"), "damping": damp_text,
            "capacitance_F": {n: float(cp.C[cp.names.index(n)]) for n in acts + sens},
@@ -995,7 +996,7 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         pa["M"].values, pa["C"].values, pa["K"].values, pa["B"].values, pa["Cq"].values,
         pa["Cv"].values, inputs=[str(v) for v in pa["input"].values],
         outputs=[str(v) for v in pa["output"].values],
-        coords=[str(v) for v in pa["coord"].values], input_units=["V"],
+        coords=[str(v) for v in pa["coord"].values], input_units=["V"] * pa.sizes["input"],
         output_units=str(pa.attrs.get("output_units", "m")).split("|"),
         D=pa["D"].values,
     )
@@ -1024,20 +1025,40 @@ def control(study: Study, plant_arrays, fn1_hz: float):
     n = plant.n_coords
     # generalised actuator force times velocity, B' q', of the open loop (for a boundary
     # layer given relative to its initial amplitude)
-    switching = plant.B[:, 0] @ open_sim["states"].values[n:, :]
-    switching_peak = float(np.max(np.abs(switching)))
+    switching = {a: plant.B[:, i] @ open_sim["states"].values[n:, :]
+                 for i, a in enumerate(plant.inputs)}
+    switching_peaks = {a: float(np.max(np.abs(v))) for a, v in switching.items()}
+    switching_peak = switching_peaks[plant.inputs[0]]
     for c in cfg.get("controllers", []):
         kind = c["type"]
+        where = f"control.controllers[{c['name']!r}]"
+        for key, names in (("actuator", plant.inputs), ("sensor", plant.outputs)):
+            if c.get(key) is not None and c[key] not in names:
+                raise ConfigError(f"{where}.{key}: {c[key]!r} is not a plant "
+                                  f"{'input' if key == 'actuator' else 'output'}; "
+                                  f"expected one of {list(names)}")
         if kind in ("PPF", "SRF"):
             ctrl = getattr(mc, kind)(targets=[(float(c["f_hz"]), float(c["zeta_f"]),
                                                float(c["gain"]))],
+                                     sensor=c.get("sensor"), actuator=c.get("actuator"),
                                      u_max=c.get("u_max"))
         elif kind == "VelocityFeedback":
-            ctrl = VelocityFeedback(float(c["gain"]), u_max=c.get("u_max"))
+            ctrl = VelocityFeedback(float(c["gain"]), sensor=c.get("sensor"),
+                                    actuator=c.get("actuator"), u_max=c.get("u_max"))
+        elif kind == "LQR":
+            acts = c.get("actuators") or [plant.inputs[0]]
+            bad = [a for a in acts if a not in plant.inputs]
+            if bad:
+                raise ConfigError(f"{where}.actuators: {bad} are not plant inputs; "
+                                  f"expected names from {list(plant.inputs)}")
+            ctrl = mc.LQR(R=float(c["R"]), q_scale=float(c.get("q_scale", 1.0)),
+                          actuator=list(acts), u_max=c.get("u_max"))
         else:
             eps = (float(c["boundary_layer"]) if "boundary_layer" in c
-                   else float(c["boundary_layer_rel"]) * switching_peak)
-            ctrl = LyapunovBangBang(u_max=float(c["u_max"]), boundary_layer=eps)
+                   else float(c["boundary_layer_rel"])
+                   * switching_peaks[c.get("actuator") or plant.inputs[0]])
+            ctrl = LyapunovBangBang(u_max=float(c["u_max"]), boundary_layer=eps,
+                                    actuator=c.get("actuator"))
         runs[str(c["name"])] = ctrl
         methods[str(c["name"])] = str(c.get("method", "auto"))
         rates[str(c["name"])] = (float(c["control_rate_hz"]) if "control_rate_hz" in c
@@ -1050,7 +1071,11 @@ def control(study: Study, plant_arrays, fn1_hz: float):
                                                      initial=x0, method=methods[name],
                                                      control_rate_hz=rates[name])
         y = sim["outputs"].sel(output="tip").values
-        u = sim["inputs"].values[0] if "inputs" in sim else np.zeros_like(y)
+        if "inputs" in sim:  # the command of the actuator with the largest peak
+            us = sim["inputs"].values
+            u = us[int(np.argmax(np.max(np.abs(us), axis=1)))]
+        else:
+            u = np.zeros_like(y)
         t = sim["time"].values
         series[name], inputs[name] = y, u
         zeta_cl = fn_cl = float("nan")
@@ -1094,22 +1119,36 @@ def control(study: Study, plant_arrays, fn1_hz: float):
 
 
 def _stability(plant, ctrl, y: np.ndarray, amp0: float) -> dict:
-    """Stability verdict of one loop.
+    """Stability verdict and margins of one loop.
 
     Linear laws (also the small-signal loop of a saturated linear law): the eigenvalues
     of the closed-loop state matrix (:func:`mvtk.control.closed_loop`); the loop is
     stable when every pole has a real part below ``-1e-9 max|p|`` (a pole on the
     imaginary axis is marginal, i.e. not stable). Nonlinear laws: along the simulated
     trajectory, finite and with the peak of the last fifth of the record below the
-    release amplitude.
+    release amplitude. Margins (:func:`mvtk.control.loop_margins`, the loop broken at
+    the actuator input): gain margin (dB), phase margin (deg) and the factor on the loop
+    gain at the edge of stability, for a linear law with one actuator; NaN otherwise
+    (no crossover: NaN too, the critical factor then says whether any gain
+    destabilises the loop).
     """
-    from ..control import closed_loop, closed_loop_modes
+    from ..control import closed_loop, closed_loop_modes, loop_margins
 
+    nan = float("nan")
+    margins = {"gain_margin_db": nan, "phase_margin_deg": nan, "critical_gain_factor": nan}
     if ctrl is None or kind_linear(ctrl):
         if ctrl is None:
             poles = closed_loop_modes(plant).eigenvalues
         else:
-            poles = closed_loop(plant, dataclasses.replace(ctrl, u_max=None)).poles()
+            lin = dataclasses.replace(ctrl, u_max=None)
+            poles = closed_loop(plant, lin).poles()
+            if not isinstance(getattr(lin, "actuator", None), list | tuple) or len(
+                    lin.actuator) == 1:
+                lm = loop_margins(plant, lin)
+                margins = {"gain_margin_db": float(lm.gain_margin_db),
+                           "phase_margin_deg": float(lm.phase_margin_deg),
+                           "critical_gain_factor": float(lm.critical_gain_factor)}
+                margins = {k: (v if np.isfinite(v) else nan) for k, v in margins.items()}
         poles = np.asarray(poles, dtype=complex)
         k = int(np.argmax(poles.real))
         p = poles[k]
@@ -1117,11 +1156,11 @@ def _stability(plant, ctrl, y: np.ndarray, amp0: float) -> dict:
         zeta_min = float(-p.real / abs(p)) if abs(p) > 0 else 0.0
         return {"stable": bool(p.real < -margin), "max_real_pole_1_per_s": float(p.real),
                 "critical_pole_imag_rad_s": float(abs(p.imag)), "zeta_min": zeta_min,
-                "stability_basis": "closed-loop eigenvalues"}
+                **margins, "stability_basis": "closed-loop eigenvalues"}
     tail = y[int(0.8 * len(y)):]
     ok = bool(np.all(np.isfinite(y)) and tail.size and np.max(np.abs(tail)) < abs(amp0))
-    return {"stable": ok, "max_real_pole_1_per_s": float("nan"),
-            "critical_pole_imag_rad_s": float("nan"), "zeta_min": float("nan"),
+    return {"stable": ok, "max_real_pole_1_per_s": nan,
+            "critical_pole_imag_rad_s": nan, "zeta_min": nan, **margins,
             "stability_basis": "simulated trajectory (decays below the release amplitude)"}
 
 
