@@ -124,3 +124,21 @@ def write_fe_test(folder, model, modes, points, sensor, *, zeta=0.01, fs=2048.0,
                        delimiter=",")
         files.append(path)
     return files
+
+
+def write_decay(path, fn_hz, *, zeta=0.01, fs=2048.0, record_s=3.0, amplitude=5.0,
+                seed=0) -> Path:
+    """A free decay of one mode (``mvtk.testing.sdof_free_decay``, acceleration in
+    m/s^2) with 0.5 % of ``amplitude`` white noise, written as a CSV file."""
+    from mvtk.testing import sdof_free_decay
+
+    d = sdof_free_decay(float(fn_hz), zeta, fs, record_s, amplitude=amplitude,
+                        quantity="acceleration", units="m/s^2")
+    x = d.values[0] + 5e-3 * amplitude * np.random.default_rng(seed).standard_normal(
+        d.sizes["time"])
+    path = Path(path)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# free decay of one mode\n# quantity: acceleration\n"
+                 "time [s],accel [m/s^2]\n")
+        np.savetxt(fh, np.column_stack([d["time"].values, x]), fmt="%.10g", delimiter=",")
+    return path

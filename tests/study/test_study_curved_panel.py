@@ -63,7 +63,6 @@ def _specimen_tests(folder: Path):
     decay of its mode 1; returns the files, its frequencies and shapes (uz at the mesh
     nodes) and the FE model."""
     from mvtk.fe import DOF_NAMES, build_model, load_structure, modal_analysis
-    from mvtk.testing import sdof_free_decay
 
     model = build_model(load_structure(_structure(folder, E_TRUE)))
     modes = modal_analysis(model, 16)
@@ -78,14 +77,9 @@ def _specimen_tests(folder: Path):
     assert len(points) == 25
     files = RH.write_fe_test(folder, model, modes, points, sensor, zeta=ZETA, fs=2048.0,
                              record_s=2.0, f_max_hz=700.0, seed=5)
-    d = sdof_free_decay(float(modes.fn_hz[0]), ZETA, 2048.0, 3.0, amplitude=5.0,
-                        quantity="acceleration", units="m/s^2")
-    x = d.values[0] + 0.025 * np.random.default_rng(41).standard_normal(d.sizes["time"])
-    with open(folder / "decay.csv", "w", encoding="utf-8") as fh:
-        fh.write("# free decay of mode 1\n# quantity: acceleration\ntime [s],accel [m/s^2]\n")
-        np.savetxt(fh, np.column_stack([d["time"].values, x]), fmt="%.10g", delimiter=",")
+    decay = RH.write_decay(folder / "decay.csv", modes.fn_hz[0], zeta=ZETA, seed=41)
     uz = model.expand(modes.shapes)[:, DOF_NAMES.index("uz"), :]
-    return files + [folder / "decay.csv"], np.asarray(modes.fn_hz), uz[points], model
+    return files + [decay], np.asarray(modes.fn_hz), uz[points], model
 
 
 @pytest.mark.slow
