@@ -221,17 +221,44 @@ def _classify_dataset(path: Path, ds) -> dict:
     return {"file": path, "kind": "skipped", "why": "only force channels"}
 
 
-def _roving_sets(tests: list[dict]) -> list[dict]:
-    """The impact files that form one roving test (hammer or sensor moves between sets).
+def _roving_groups(tests: list[dict]) -> list[list[dict]]:
+    """The impact files that form roving tests (hammer or sensor moves between sets).
 
-    At least two hammer-test files whose force and response channels carry node
-    numbers, and whose (hammer node, sensor node) pairs differ: a roving hammer (the
-    hammer node changes) or a roving sensor. Empty otherwise.
+    Hammer-test files whose force and response channels carry node numbers are grouped
+    by folder, in the order given; within a folder a (hammer node, sensor node) pair
+    seen again starts a new test (a repeat of the test). Each group of at least two
+    files is one roving test: a roving hammer (the hammer node changes) or a roving
+    sensor. Empty when there is none.
     """
     cand = [t for t in tests if t["kind"] == "impact" and "nodes" in t]
-    if len(cand) < 2 or len({t["nodes"] for t in cand}) != len(cand):
-        return []
-    return cand
+    folders: dict = {}
+    for t in cand:
+        folders.setdefault(Path(t["file"]).resolve().parent, []).append(t)
+    groups = []
+    for members in folders.values():
+        cur: list[dict] = []
+        for t in members:
+            if any(t["nodes"] == u["nodes"] for u in cur):
+                groups.append(cur)
+                cur = []
+            cur.append(t)
+        groups.append(cur)
+    return [g for g in groups if len(g) >= 2]
+
+
+def _roving_band(group: list[dict]) -> tuple[float, float, str]:
+    """Identification band of a roving test from its data: ``(fmin, fmax, why)``."""
+    lo = max(max(t["band_hz"][0] for t in group), 0.0)
+    hi = 0.95 * min(t["band_hz"][1] for t in group)
+    # the band from the data: around the reliable resonances any set showed (a mode on
+    # a nodal line of one hammer point is seen at another), inside the excited band
+    peaks = sorted({f for t in group for f in (t.get("fn_hz") or [])})
+    note = "excited band of the sets (no reliable resonance found)"
+    if peaks:
+        lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
+        note = (f"0.7 x the lowest and 1.2 x the highest of the reliable resonances of the "
+                f"sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
+    return max(lo, 0.02 * hi), hi, note
 
 
 def _fmt_list(values) -> str:
@@ -259,8 +286,13 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         paired with an FE mode of ``structure`` by frequency), every other hammer test
         ``[measurements.impact_2]``, ... (with its own reliable resonances), the free
         decays ``[measurements.decay]``, ``[measurements.decay_2]``, ..., a multi-point
-        FRF set (UFF 58 with node numbers) ``[modal]``. Files that fit none are listed in
-        the result with the reason.
+        FRF set (UFF 58 with node numbers) ``[modal]``. Hammer-test files with node
+        numbers form roving tests (grouped by folder; a repeated hammer/sensor node pair
+        starts another test): the first is ``[modal]`` (``sets``), every further one a
+        ``[measurements.roving_<k>]`` of kind ``multi-point`` (as every further
+        multi-point FRF file, ``[measurements.multipoint_<k>]``), identified on its own
+        and compared with ``[modal]``. Files that fit none are listed in the result with
+        the reason.
     name : str, optional
         Study name (default: the folder name).
     overwrite : bool
@@ -332,17 +364,18 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             return [commented]
         return [f"geometry = {_toml(_rel(Path(geometry), folder))}"]
 
-    roving = _roving_sets(tests) if modal is None else []
-    for t in roving:
-        t["kind"] = "impact" if t is impact else "roving set"
-        t["roving"] = True
+    groups = _roving_groups(tests)
+    roving = groups[0] if groups and modal is None else []
+    # further roving tests: multi-point measurements compared with the first
+    further = groups[1:] if roving else groups
+    for g in ([roving] if roving else []) + further:
+        for t in g:
+            t["kind"] = "impact" if t is impact else "roving set"
+            t["roving"] = True
     more_impacts = [t for t in tests if t["kind"] == "impact" and t is not impact
                     and not t.get("roving")]
     more_decays = [t for t in tests if t["kind"] == "decay" and t is not decay]
-    for t in tests:
-        if t["kind"] == "modal" and t is not modal:
-            t.update(kind="skipped", why="a second multi-point FRF set: a study identifies "
-                     "one [modal] test")
+    more_modal = [t for t in tests if t["kind"] == "modal" and t is not modal]
 
     lines = [
         f"# Validation study written by `mvtk init` from {len(tests)} measurement file(s).",
@@ -361,7 +394,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "n_modes = 6",
         "",
     ]
-    if impact or decay or more_impacts:
+    if impact or decay or more_impacts or further or more_modal:
         lines.append("[measurements]")
         lines.append("")
     if impact:
@@ -396,6 +429,30 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             *([] if k == 0 else ['kind = "decay"']),
             f"file = {_toml(_rel(t['file'], folder))}",
             f"channel = {_toml(t['channel'])}",
+            *opts_line(t),
+            "",
+        ]
+    for k, g in enumerate(further):
+        lo, hi, band_note = _roving_band(g)
+        lines += [
+            f"[measurements.roving_{k + 2}]   # another roving test of the specimen "
+            f"({len(g)} sets): identified on its own and compared with [modal]",
+            'kind = "multi-point"',
+            f"sets = {_toml([_rel(t['file'], folder) for t in g])}",
+            f"fmin_hz = {lo:.6g}   # {band_note}",
+            f"fmax_hz = {hi:.6g}",
+            *geometry_line("# geometry: that of [modal]"),
+            *opts_line(*g),
+            "",
+        ]
+    for k, t in enumerate(more_modal):
+        lines += [
+            f"[measurements.multipoint_{k + 2}]   # another multi-point FRF set: identified "
+            "on its own and compared with [modal]",
+            'kind = "multi-point"',
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"fmin_hz = {t['fmin']:.6g}",
+            f"fmax_hz = {t['fmax']:.6g}",
             *opts_line(t),
             "",
         ]
@@ -477,17 +534,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             "",
         ]
     if roving:
-        lo = max(max(t["band_hz"][0] for t in roving), 0.0)
-        hi = 0.95 * min(t["band_hz"][1] for t in roving)
-        # the band from the data: around the reliable resonances any set showed (a
-        # mode on a nodal line of one hammer point is seen at another), inside the
-        # excited band
-        peaks = sorted({f for t in roving for f in (t.get("fn_hz") or [])})
-        band_note = "excited band of the sets (no reliable resonance found)"
-        if peaks:
-            lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
-            band_note = (f"0.7 x the lowest and 1.2 x the highest of the reliable "
-                         f"resonances of the sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
+        lo, hi, band_note = _roving_band(roving)
         sets = _toml([_rel(t["file"], folder) for t in roving])
         kind = ("roving hammer" if len({t["nodes"][0] for t in roving}) > 1
                 else "roving sensor")
@@ -495,7 +542,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"[modal]                 # {kind} test: {len(roving)} sets with node numbers "
             "(mvtk.modal)",
             f"sets = {sets}",
-            f"fmin_hz = {max(lo, 0.02 * hi):.6g}   # {band_note}",
+            f"fmin_hz = {lo:.6g}   # {band_note}",
             f"fmax_hz = {hi:.6g}",
 *geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
                            "needed to correlate with the FE model"),

@@ -51,10 +51,11 @@ def _write(path: Path, desc: dict) -> Path:
     return path
 
 
-def _specimen_tests(folder: Path):
-    """12 hammer points (4 x 3 grid, hit 1 at the accelerometer on the free corner) and
-    a decay of mode 1; returns the files, the specimen's frequencies, mode types and
-    shapes (uz at the hammer points)."""
+def _specimen_tests(folder: Path, sensor_xy=(0.24, 0.0), seed=60):
+    """12 hammer points (4 x 3 grid, hit 1 on the free corner (0.24, 0), where the
+    accelerometer is unless ``sensor_xy`` says otherwise) and a decay of mode 1; returns
+    the files, the specimen's frequencies, mode types and shapes (uz at the hammer
+    points)."""
     from mvtk.fe import DOF_NAMES, build_model, modal_analysis
 
     truth = copy.deepcopy(PLATE)
@@ -65,13 +66,12 @@ def _specimen_tests(folder: Path):
     def node(x, y):
         return int(np.argmin(np.linalg.norm(model.nodes - [x, y, 0.0], axis=1)))
 
-    sensor = node(0.24, 0.0)
-    points = [sensor] + [node(x, y) for x in (0.06, 0.12, 0.18, 0.24) for y in (0.0, 0.06, 0.12)
-                         if (x, y) != (0.24, 0.0)]
-    files = RH.write_fe_test(folder, model, modes, points, sensor, zeta=ZETA, fs=1024.0,
-                             record_s=8.0, f_max_hz=450.0, seed=60)
+    points = [node(0.24, 0.0)] + [node(x, y) for x in (0.06, 0.12, 0.18, 0.24)
+                                  for y in (0.0, 0.06, 0.12) if (x, y) != (0.24, 0.0)]
+    files = RH.write_fe_test(folder, model, modes, points, node(*sensor_xy), zeta=ZETA,
+                             fs=1024.0, record_s=8.0, f_max_hz=450.0, seed=seed)
     decay = RH.write_decay(folder / "decay.csv", modes.fn_hz[0], zeta=ZETA, fs=1024.0,
-                           record_s=6.0, seed=61)
+                           record_s=6.0, seed=seed + 1)
     uz = model.expand(modes.shapes)[:, DOF_NAMES.index("uz"), :]
     return (files + [decay], np.asarray(modes.fn_hz), np.asarray(modes.mode_type),
             uz[points])
@@ -129,3 +129,55 @@ def test_pzt_plate_roving_hammer_from_init_to_run(tmp_path, capsys):
     checks = {c.name: c for c in study_checks(res)}
     assert all(c.passed for c in checks.values())
     assert all(f"updated FE f{i}" in checks for i in range(1, len(targets) + 1))
+
+
+@pytest.mark.slow
+def test_two_roving_tests_of_one_specimen_in_one_study(tmp_path):
+    """Two roving-hammer tests of the specimen (two folders; the accelerometer on one
+    free corner, then on the other): init makes the first [modal] and the second a
+    multi-point measurement; the modal stage identifies each, the second's modes are
+    the specimen's (frequency 0.1 %, MAC > 0.99 with its FE shapes) and are paired with
+    the same modes of the first; the report shows both."""
+    from mvtk.study import run, study_checks
+    from mvtk.study._init import init_study
+
+    (tmp_path / "day1").mkdir()
+    (tmp_path / "day2").mkdir()
+    a, f_true, _, shapes_true = _specimen_tests(tmp_path / "day1")
+    b, *_ = _specimen_tests(tmp_path / "day2", sensor_xy=(0.24, 0.12), seed=70)
+    structure = _write(tmp_path / "plate.toml", PLATE)
+    res = init_study(tmp_path / "study", structure=structure, measurements=a[:-1] + b[:-1],
+                     geometry=tmp_path / "day1" / "geometry.csv")
+    cfg = tomllib.loads(res.study.read_text(encoding="utf-8"))
+    assert [Path(p).parent.name for p in cfg["modal"]["sets"]] == ["day1"] * 12
+    mp = cfg["measurements"]["roving_2"]
+    assert mp["kind"] == "multi-point" and len(mp["sets"]) == 12
+    assert all(Path(p).parent.name == "day2" for p in mp["sets"])
+    assert set(cfg["measurements"]) == {"impact", "roving_2"}
+    out = run(res.study, tmp_path / "report", stages=["modal"], progress=False)
+    assert not out.failed, out.failed
+    mod = out.results["modal"]
+    t2 = mod["tests"]["roving_2"]
+    assert t2["n_responses"] == 12 and "reciprocity" in t2["note"]
+    tab, cmp_ = t2["table"], t2["comparison"]
+    assert len(tab["fn_hz"]) >= 4 and all(tab["reliable"])
+    truth = [int(np.argmin(np.abs(f_true - f))) for f in tab["fn_hz"]]
+    assert tab["fn_hz"] == pytest.approx(f_true[truth], rel=1e-3)
+    # the same modes in the first test, by frequency and by shape
+    first = np.asarray(mod["table"]["fn_hz"])
+    assert [int(np.argmin(np.abs(first - f_true[m]))) + 1 for m in truth] == \
+        cmp_["paired_mode"]
+    assert min(cmp_["mac"]) > 0.99 and set(cmp_["n_common_dofs"]) == {12}
+    import mvtk.modal
+
+    own = np.diag(mvtk.modal.mac(shapes_true[:, truth].T, np.asarray(
+        [out.arrays["modal"]["shapes"].values[i - 1] for i in cmp_["paired_mode"]])))
+    assert own.min() > 0.99       # the first test's paired shapes are the specimen's
+    checks = [c for c in study_checks(out) if "multi-point test roving_2" in c.name]
+    assert len(checks) == 3 * len(tab["fn_hz"]) and all(c.passed for c in checks)
+    from mvtk.study._report import build_report  # the report of the modal stage alone
+
+    html = build_report(out, {}).read_text(encoding="utf-8")
+    assert "Multi-point test roving_2" in html
+    for name in ("modal_modes_roving_2", "modal_compare_roving_2"):
+        assert (tmp_path / "report" / "tables" / f"{name}.csv").is_file()
