@@ -201,7 +201,9 @@ def modal(study):
     result = {**_test_summary(frf, res, note, source, band), "figures": figures,
               "warnings": [f"{w.category.__name__}: {w.message}" for w in caught]}
     meas = study.section("measurements") or {}
-    others = [n for n in meas.keys() if meas[n]["kind"] == "multi-point"]
+    # the names only (a tracked section records them so; a plain dict has no names())
+    names = meas.names() if hasattr(meas, "names") else list(meas)
+    others = [n for n in names if meas[n]["kind"] == "multi-point"]
     if others:
         result["tests"] = {}
     for name in others:
