@@ -349,6 +349,7 @@ def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Chec
             else:
                 out.append(Check(label, z_m, z_hp, tol["zeta_consistency_rel"], "",
                                  source="consistency between sections"))
+    out += _multipoint_repeat_checks(res, tol)
     up = res.results.get("updating")
     if mod and up:
         used = {int(k) for k in up.get("target_test_modes") or [] if k is not None}
@@ -361,6 +362,31 @@ def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Chec
                 out.append(Check(f"MPD of test mode {int(m)} (shape used to pair a target)",
                                  float(mpd), float(tol["mpd_max_deg"]), 0.0, "deg",
                                  kind="upper", source="normal-mode shape"))
+    return out
+
+
+def _multipoint_repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
+    """Every reliable mode of a further multi-point test against the reliable [modal]
+    mode it was paired with: frequency (``identified_fn_rel``), damping
+    (``zeta_consistency_rel``) and MAC on the common DOFs (``mac_min``)."""
+    mod = res.results.get("modal") or {}
+    out: list[Check] = []
+    ok_a = list(mod.get("table", {}).get("reliable", []))
+    for name, t in (mod.get("tests") or {}).items():
+        c, ok_b = t["comparison"], list(t["table"].get("reliable", []))
+        src = f"same specimen, two multi-point tests ({t['file']})"
+        for j, i in enumerate(c["paired_mode"]):
+            if not i or not (j < len(ok_b) and ok_b[j]) or not (i - 1 < len(ok_a)
+                                                                 and ok_a[i - 1]):
+                continue
+            what = f"mode {i} ({c['paired_fn_hz'][j]:.1f} Hz): multi-point test {name} vs [modal]"
+            out.append(Check(f"f of {what}", c["fn_hz"][j], c["paired_fn_hz"][j],
+                             tol["identified_fn_rel"], "Hz", source=src))
+            out.append(Check(f"zeta of {what}", c["zeta"][j], c["paired_zeta"][j],
+                             tol["zeta_consistency_rel"], "", source=src))
+            if np.isfinite(c["mac"][j]):
+                out.append(Check(f"MAC of {what}", c["mac"][j], float(tol["mac_min"]), 0.0,
+                                 "", kind="lower", source=src))
     return out
 
 
@@ -1003,6 +1029,13 @@ def _model_form_text(res: StudyResult) -> str | None:
     return " ".join(parts)
 
 
+def _slug(name: str) -> str:
+    """A file-name part of a test name (letters, digits, underscores)."""
+    import re
+
+    return re.sub(r"[^A-Za-z0-9_]+", "_", str(name)).strip("_") or "test"
+
+
 def _section_multipoint(rep: Report, res: StudyResult) -> None:
     """Multi-point test: identified modes, stabilisation, correlation with the FE model."""
     if "modal" not in res.study.config:
@@ -1022,6 +1055,19 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
     sec.figure(_png(mod["figures"]["stabilisation"]),
                "Stabilisation diagram (CMIF behind); dashed: selected modes")
     sec.figure(_png(mod["figures"]["synthesis"]), "Measured vs synthesised FRFs")
+    for name, t in (mod.get("tests") or {}).items():
+        n_common = (t["comparison"]["n_common_dofs"] or [0])[0]
+        sec.text(f"Multi-point test {name}, {t['file']}: {t['n_responses']} responses x "
+                 f"{t['n_references']} reference(s), {t['n_lines']} lines, identified on "
+                 f"its own in {t['band_hz'][0]:g}-{t['band_hz'][1]:g} Hz; each of its modes "
+                 "beside the mode of the test above nearest in frequency (within "
+                 f"modal.pair_within; 0: none), MAC on the {n_common} DOFs both tests measured."
+                 + (f" {t['note'][0].upper()}{t['note'][1:]}." if t.get("note") else ""))
+        sec.table(pd.DataFrame(t["table"]), f"modal_modes_{_slug(name)}",
+                  f"Identified modes of multi-point test {name}", passed_column=None)
+        sec.table(pd.DataFrame(t["comparison"]), f"modal_compare_{_slug(name)}",
+                  f"Multi-point test {name} vs the test above: the same modes",
+                  passed_column=None)
     if "correlation" not in res.results:
         _stage_missing(sec, res, "correlation")
         return
@@ -1068,11 +1114,16 @@ def _stage_warnings(res: StudyResult) -> list[str]:
                 out += [f"{stage}: {w}" for w in (sub.get("warnings") or [])]
     mod = res.results.get("modal")
     if mod:
-        t = pd.DataFrame(mod["table"])
-        if "reliable" in t:
-            for _, row in t[~t["reliable"].astype(bool)].iterrows():
-                out.append(f"modal: identified mode {int(row['mode'])} at "
-                           f"{row['fn_hz']:.4g} Hz is not reliable: {row.get('reason', '')}")
+        for name, tab in [("", mod["table"])] + [(f" of {n}", t["table"]) for n, t in
+                                                (mod.get("tests") or {}).items()]:
+            t = pd.DataFrame(tab)
+            if "reliable" in t:
+                for _, row in t[~t["reliable"].astype(bool)].iterrows():
+                    out.append(f"modal: identified mode {int(row['mode'])}{name} at "
+                               f"{row['fn_hz']:.4g} Hz is not reliable: "
+                               f"{row.get('reason', '')}")
+        for t in (mod.get("tests") or {}).values():
+            out += [f"modal: {w}" for w in t.get("warnings") or []]
     cor = res.results.get("correlation")
     if cor:
         pairs = pd.DataFrame(cor["pairs"])
@@ -1236,6 +1287,7 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     tests = sorted(p.name for p in res.study.measurement_files.values())
     if "modal" in res.results:
         tests.append(res.results["modal"]["file"])
+        tests += [t["file"] for t in (res.results["modal"].get("tests") or {}).values()]
     sf = res.study.structure_file
     model = sf.name if sf is not None else "the inline structure"
     rep.executive_summary(
