@@ -34,6 +34,11 @@ def _correlations(y, yr, nlag):
 
 # largest block Toeplitz matrix (rows) an automatic n_lags may ask for (SVD ~ 2 s)
 _MAX_TOEPLITZ_ROWS = 2000
+#: default lowest frequency the block rows resolve, as a fraction of the record's lowest
+#: spectral peak: an octave below it. With 0.9 (the lowest peak just inside the band)
+#: a weak first mode 13 % below a strong second one was cut, and a detected first
+#: mode 14 % above the band's start was not identified (too few lags: 1.15 periods).
+LOWEST_PEAK_FRACTION = 0.5
 
 
 def _decimate(y, fs, fmax):
@@ -93,10 +98,9 @@ def _warn_unselected_peaks(y, fs, band, fn_sel, kurt_of):
 
     from ..errors import AccuracyWarning
 
-    f, amp, df = _spectral_peaks(y, fs, band[0], band[1])
-    if not f.size:
+    strong, df = _near_strong_peaks(y, fs, band)
+    if not strong.size:
         return
-    strong = f[amp >= 0.5 * amp.max()]
     fn_sel = np.asarray(fn_sel, dtype=float)
     missed = [fp for fp in strong
               if not np.any(np.abs(fn_sel - fp) <= max(0.01 * fp, 2 * df))]
@@ -113,6 +117,28 @@ def _warn_unselected_peaks(y, fs, band, fn_sel, kurt_of):
         "a mode SSI-cov could not fit): check them with fn_hz=[...]",
         AccuracyWarning, stacklevel=3,
     )
+
+
+def _near_strong_peaks(y, fs, band):
+    """``(f, df)``: the record's strongest spectral peaks in the band (at least half the
+    largest amplitude) and the Welch line spacing."""
+    f, amp, df = _spectral_peaks(y, fs, band[0], band[1])
+    return (f[amp >= 0.5 * amp.max()] if f.size else f), df
+
+
+def _line_kurtosis(y, fs, band, fn_sel, band_kurtosis):
+    """Per selected mode, the lowest band kurtosis (band ``+-0.5 %``) of the strong
+    spectral peaks it explains (within 1 % or 2 lines); NaN when none."""
+    strong, df = _near_strong_peaks(y, fs, band)
+    out = np.full(np.size(fn_sel), np.nan)
+    if not strong.size:
+        return out
+    k = band_kurtosis(y, fs, strong, np.full(strong.size, 0.0025))
+    for m, f in enumerate(np.atleast_1d(fn_sel)):
+        near = np.abs(strong - f) <= max(0.01 * f, 2 * df)
+        if near.any():
+            out[m] = np.nanmin(k[near])
+    return out
 
 
 def _warn_power_below(y, lo, hi, i, fs):
@@ -177,10 +203,11 @@ def ssi_cov(
         end is raised to the lowest frequency the block rows resolve,
         ``fs / (2 n_lags)`` (Rainieri & Fabbrocino 2014, ch. 4: ``i >= fs / (2 f_0)``
         for the lowest frequency ``f_0`` of interest). Without ``n_lags``, ``n_lags``
-        is raised to resolve ``fmin``, or without ``fmin`` 0.9 x the record's lowest
-        spectral peak (:func:`mvtk.signal.find_peaks`), up to 2000 rows of the
-        Toeplitz matrix. A record whose largest spectral line or more than 25 % of whose
-        power lies below the resolved band gives a
+        is raised to resolve ``fmin``, or without ``fmin`` half the record's lowest
+        spectral peak (:func:`mvtk.signal.find_peaks`; an octave below it,
+        :data:`LOWEST_PEAK_FRACTION`), up to 2000 rows of the Toeplitz matrix. A
+        record whose largest spectral line or more than 25 % of whose power lies below
+        the resolved band gives a
         :class:`~mvtk.errors.ResolutionWarning` naming its largest peak there.
     orders : iterable of int
         State-space orders (even; each gives ``n/2`` conjugate pairs).
@@ -188,7 +215,7 @@ def ssi_cov(
         Reference outputs for the correlations (default every channel).
     n_lags : int, optional
         Block rows ``i``. Default: ``max(ceil((max_order + 1) / n_ref), 20)``, raised
-        to ``ceil(fs / (2 f_0))`` with ``f_0`` = ``fmin`` or 0.9 x the lowest spectral
+        to ``ceil(fs / (2 f_0))`` with ``f_0`` = ``fmin`` or 0.5 x the lowest spectral
         peak of the record, at most ``2000 / n_channels``.
     fs : float, optional
         Sampling rate in Hz (derived from ``time`` and checked if given).
@@ -244,10 +271,11 @@ def _ssi_cov(x, fmin, fmax, orders, *, reference=None, n_lags=None, fs=None, cri
     pmax = int(orders.max())
     i = int(n_lags) if n_lags is not None else max(int(np.ceil((pmax + 1) / nr)), 20)
     if n_lags is None:
-        # the lowest frequency to resolve: fmin, or the record's lowest spectral peak
-        # (with 10 % margin, so it lies inside the band, clear of its edge)
+        # the lowest frequency to resolve: fmin, or an octave below the record's
+        # lowest spectral peak (a weaker mode below it that the peak picker missed
+        # stays in the band, and the lags span two periods of that peak)
         f0 = float(fmin) if fmin is not None and float(fmin) > 0 else \
-            0.9 * _lowest_peak_hz(y, fs, fmax)
+            LOWEST_PEAK_FRACTION * _lowest_peak_hz(y, fs, fmax)
         if f0 > 0:
             i = max(i, min(int(np.ceil(fs / (2 * f0))), _MAX_TOEPLITZ_ROWS // nl))
     if i * nr < pmax or i * nl < pmax:
@@ -328,7 +356,10 @@ def identify_output_only(
     there is no FRF synthesis (``frf``, ``synthesised``, ``correlation`` are None).
     Each mode also gets the kurtosis of its band-passed response
     (:func:`mvtk.modal._harmonics.band_kurtosis`): below 2.0 it is marked not reliable
-    as a harmonic (a sinusoid has 1.5, a mode's random response 3).
+    as a harmonic (a sinusoid has 1.5, a mode's random response 3). A mode that
+    explains one of the record's strongest spectral lines (within 1 % or 2 lines) gets
+    that line's band kurtosis (band ``+-0.5 %``) when it is lower: a pole between a
+    harmonic and a neighbouring line has a mixed band of its own.
 
     Uncertainty (``fn_std_hz`` in Hz, ``zeta_std``, ``shape_std`` of the unit-maximum
     complex shapes): first-order propagation of the covariance of the output
@@ -406,9 +437,12 @@ def identify_output_only(
     from ._harmonics import HARMONIC_KURTOSIS, band_kurtosis
 
     fs = signal.sampling_rate(th)
-    kurt = band_kurtosis(th.values, fs, fn, zeta)
+    y = th.values.astype(float)
+    kurt = band_kurtosis(y, fs, fn, zeta)
+    # a pole between a harmonic and a neighbouring line gets a mixed band; the strong
+    # lines it explains (within 1 % or 2 lines) must be random too
+    kurt = np.fmin(kurt, _line_kurtosis(y, fs, diagram.band_hz, fn, band_kurtosis))
     if fn_hz is None:
-        y = th.values.astype(float)
         _warn_unselected_peaks(y, fs, diagram.band_hz, fn,
                                lambda f: band_kurtosis(y, fs, f, np.full(f.size, 0.0025)))
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
