@@ -514,7 +514,7 @@ def _uncertainty(state, diagram, sel, n_blocks, clus):
         P = block_perturbations(state["y"], state["yr"], i, nb, U, Vt,
                                 int(diagram.orders.max()) + 1)
         margin = dict(zip(diagram.orders.tolist(),
-                          truncation_margin(U, S, P, diagram.orders)))
+                          truncation_margin(U, S, Vt, P, diagram.orders)))
         pick = np.full(nm, -1)
         for m in range(nm):
             cand = np.flatnonzero(_same_mode(diagram, sel.pole[m], sel.vector[m], clus))

@@ -61,6 +61,19 @@ class BlockPerturbations:
 
     def __init__(self, Q, W):
         self.Q, self.W = Q, W
+        self._proj = None
+
+    def projections(self, U, Vt):
+        """``(U^T Q_b, W_b V, (I - U U^T) Q_b or None)``, computed once for all orders:
+        ``u_k^T dH v_j`` for ``j < K`` and every ``k``, ``u_j^T dH v_k`` likewise, and
+        the part of ``dH v_j`` outside the range of ``U`` (more rows than columns)."""
+        if self._proj is None:
+            uq = np.swapaxes(self.Q, 1, 2) @ U                 # (nb, K, r)
+            uq = np.swapaxes(uq, 1, 2)                         # (nb, r, K)
+            wv = self.W @ Vt.T                                 # (nb, K, r)
+            out = self.Q - U @ uq if U.shape[0] > U.shape[1] else None
+            self._proj = (uq, wv, out)
+        return self._proj
 
     @classmethod
     def from_blocks(cls, T, U, Vt, k: int):
@@ -119,13 +132,13 @@ def block_perturbations(y, yr, i: int, n_blocks: int, U, Vt, k: int) -> BlockPer
     return BlockPerturbations((Q - Q.mean(axis=0)) * c, (W - W.mean(axis=0)) * c)
 
 
-def truncation_margin(U, S, P: BlockPerturbations, orders) -> np.ndarray:
+def truncation_margin(U, S, Vt, P: BlockPerturbations, orders) -> np.ndarray:
     """Gap ``(s_n - s_(n+1)) / (std s_n + std s_(n+1))`` of the Toeplitz matrix's
     singular values at each model order ``n``, in their first-order standard deviations
     (``d s_j = u_j^T dH v_j``, over the data blocks).
 
     The first-order propagation divides by ``s_j^2 - s_k^2`` across the truncation
-    (:func:`_subspace_derivative`); it describes the scatter only while the perturbation
+    (:func:`_shift_derivatives`); it describes the scatter only while the perturbation
     is small against that gap. Above the system's order the truncation cuts through
     the noise singular values (gap below 1 std) and the linearised standard deviations
     exceed the scatter by factors of 2..50 (measured on a 3-DOF chain); at an order
@@ -134,7 +147,8 @@ def truncation_margin(U, S, P: BlockPerturbations, orders) -> np.ndarray:
     """
     orders = np.atleast_1d(np.asarray(orders, dtype=int))
     top = min(P.Q.shape[2], S.size)
-    d = np.sum(U[None, :, :top] * P.Q[:, :, :top], axis=1)      # (nb, top): u_j^T dH v_j
+    uq = P.projections(U, Vt)[0]
+    d = np.diagonal(uq[:, :top, :top], axis1=1, axis2=2)        # (nb, top): u_j^T dH v_j
     ds = np.sqrt(np.sum(d**2, axis=0))
     out = np.zeros(orders.size)
     for k, n in enumerate(orders):
@@ -144,30 +158,40 @@ def truncation_margin(U, S, P: BlockPerturbations, orders) -> np.ndarray:
     return out
 
 
-def _subspace_derivative(U, S, Vt, P: BlockPerturbations, n):
-    """Directional derivatives of the observability matrix ``O_n = U_n S_n^(1/2)``
-    along each data block's ``dH``, leaving out the part inside ``span(U_n)``.
+def _shift_derivatives(U, S, Vt, P: BlockPerturbations, n, n_out, Oup, res, A):
+    """Directional derivatives, along each data block's ``dH``, of the least-squares
+    ``A = O_up^+ O_down`` (as ``G dA``, ``G = O_up^T O_up``) and of ``C`` for the
+    observability matrix ``O_n = U_n S_n^(1/2)``: ``(G dA (nb, n, n), dC (nb, n_out, n))``.
 
     Poles and shapes ``C psi`` are invariant to a change of basis ``O_n -> O_n M``
     (``A -> M^-1 A M``), so only the rotation of the subspace out of ``span(U_n)``
     matters: for a singular triple ``(u_j, s_j, v_j)``, ``j <= n``,
     ``du_j = sum_{k > n} (s_j u_k^T dH v_j + s_k u_j^T dH v_k) / (s_j^2 - s_k^2) u_k
     + (I - U U^T) dH v_j / s_j`` (first-order SVD perturbation, distinct singular
-    values; Reynders et al. 2008, sec. 4), and ``dO_j = s_j^(1/2) du_j``.
-    Returns ``(n_b, rows, n)``.
+    values; Reynders et al. 2008, sec. 4), ``dO_j = s_j^(1/2) du_j``. With
+    ``dO = U_o Z + E``, ``G dA = dO_up^T res + O_up^T (dO_down - dO_up A)`` (``res`` the
+    least-squares residual) is assembled from ``n x (r - n)`` products of ``U_o``
+    formed once per order, never from ``dO`` itself.
     """
-    Uo, Vo = U[:, n:], Vt[n:].T
+    uq, wv, out = P.projections(U, Vt)
     sn, so = S[:n], S[n:]
-    X = P.Q[:, :, :n]                                         # (nb, m, n): dH v_j
-    a_kj = Uo.T @ X                                           # u_k^T dH v_j
-    a_jk = np.swapaxes(P.W[:, :n] @ Vo, 1, 2)                 # u_j^T dH v_k, as [k, j]
+    Uo = U[:, n:]
+    a_kj = uq[:, n:, :n]                                      # u_k^T dH v_j
+    a_jk = np.swapaxes(wv[:, :n, n:], 1, 2)                   # u_j^T dH v_k, as [k, j]
     with np.errstate(divide="ignore", invalid="ignore"):
-        coef = (sn[None, None, :] * a_kj + so[None, :, None] * a_jk) / (
-            sn[None, None, :] ** 2 - so[None, :, None] ** 2)
-    du = Uo @ coef
-    if U.shape[0] > U.shape[1]:                               # rows beyond the rank
-        du += (X - U @ (U.T @ X)) / sn[None, None, :]
-    return du * np.sqrt(sn)[None, None, :]
+        Z = (sn[None, None, :] * a_kj + so[None, :, None] * a_jk) / (
+            sn[None, None, :] ** 2 - so[None, :, None] ** 2) * np.sqrt(sn)[None, None, :]
+    P1 = Uo[:-n_out].T @ res                                  # (r-n, n)
+    P2 = Oup.T @ Uo[n_out:]                                   # (n, r-n)
+    P3 = Oup.T @ Uo[:-n_out]
+    rhs = np.swapaxes(Z, 1, 2) @ P1 + P2 @ Z - (P3 @ Z) @ A
+    dC = Uo[:n_out] @ Z
+    if out is not None:                                       # rows beyond the rank
+        E = out[:, :, :n] / np.sqrt(sn)[None, None, :]
+        Eup, Edn = E[:, :-n_out], E[:, n_out:]
+        rhs += np.swapaxes(Eup, 1, 2) @ res + Oup.T @ (Edn - Eup @ A)
+        dC = dC + E[:, :n_out]
+    return rhs, dC
 
 
 def ssi_pole_uncertainty(U, S, Vt, P: BlockPerturbations, n_out: int, order: int, fs: float,
@@ -176,7 +200,7 @@ def ssi_pole_uncertainty(U, S, Vt, P: BlockPerturbations, n_out: int, order: int
 
     First-order propagation (Reynders, Pintelon & De Roeck 2008) of the Toeplitz
     covariance ``Sigma_H = T T^T`` (:func:`toeplitz_blocks`), data block by data block
-    (Döhler & Mevel 2013): ``dO`` from the SVD (:func:`_subspace_derivative`), ``dA``
+    (Döhler & Mevel 2013): ``dO`` from the SVD (:func:`_shift_derivatives`), ``dA``
     of the least-squares ``A = O_up^+ O_down`` including its residual term,
     ``d mu_j = chi_j^H dA phi_j / chi_j^H phi_j`` (left and right eigenvectors),
     ``d lambda = fs d mu / mu``, and the shape ``C phi_j`` normalised to its largest
@@ -216,10 +240,7 @@ def ssi_pole_uncertainty(U, S, Vt, P: BlockPerturbations, n_out: int, order: int
     A = np.linalg.solve(G, Oup.T @ Odn)
     res = Odn - Oup @ A
     C = O[:n_out]
-    dO = _subspace_derivative(U, S, Vt, P, n)                 # (nb, m, n)
-    dup, ddn = dO[:, :-n_out], dO[:, n_out:]
-    rhs = np.einsum("bmi,mj->bij", dup, res) + np.einsum(
-        "mi,bmj->bij", Oup, ddn - dup @ A)
+    rhs, dC = _shift_derivatives(U, S, Vt, P, n, n_out, Oup, res, A)
     dA = np.linalg.solve(G[None], rhs)                        # (nb, n, n)
     mu, chi, phi = scipy.linalg.eig(A, left=True, right=True)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -244,7 +265,7 @@ def ssi_pole_uncertainty(U, S, Vt, P: BlockPerturbations, n_out: int, order: int
         g = np.einsum("ki,bij,j->bk", chiH, dA, phi[:, j])   # chi_k^H dA phi_j
         dphi = (g * w[None, :]) @ phi.T                         # (nb, n)
         v = C @ phi[:, j]
-        dv = np.einsum("bli,i->bl", dO[:, :n_out], phi[:, j]) + dphi @ C.T
+        dv = dC @ phi[:, j] + dphi @ C.T
         r = int(np.argmax(np.abs(v)))
         s = v / v[r]
         ds = (dv - s[None, :] * dv[:, r:r + 1]) / v[r]
