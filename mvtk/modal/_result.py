@@ -71,7 +71,15 @@ class IdentifiedModes:
         channel (:func:`mvtk.modal._harmonics.band_kurtosis`; 3 for a mode's response to
         random excitation, 1.5 for a sinusoid). Below
         :data:`~mvtk.modal._harmonics.HARMONIC_KURTOSIS` (2.0) the mode is marked not
-        reliable ("harmonic"). ``None`` (pLSCF+LSFD).
+        reliable ("harmonic"). A mode that explains one of the record's strongest
+        spectral lines (within 1 % or 2 lines) gets that line's band kurtosis when it
+        is lower. ``None`` (pLSCF+LSFD).
+    fn_std_hz, zeta_std : numpy.ndarray or None
+        First-order standard deviations of ``fn_hz`` (Hz) and ``zeta``: pLSCF+LSFD from
+        the FRF fit residual, SSI-cov from the scatter of data blocks (Reynders,
+        Pintelon & De Roeck 2008; Döhler & Mevel 2013); NaN where not computed.
+    shape_std : xarray.DataArray or None
+        Standard deviation of each shape component, dims of :attr:`shapes`.
     """
 
     method: str

@@ -34,6 +34,11 @@ def _correlations(y, yr, nlag):
 
 # largest block Toeplitz matrix (rows) an automatic n_lags may ask for (SVD ~ 2 s)
 _MAX_TOEPLITZ_ROWS = 2000
+#: default lowest frequency the block rows resolve, as a fraction of the record's lowest
+#: spectral peak: an octave below it. With 0.9 (the lowest peak just inside the band)
+#: a weak first mode 13 % below a strong second one was cut, and a detected first
+#: mode 14 % above the band's start was not identified (too few lags: 1.15 periods).
+LOWEST_PEAK_FRACTION = 0.5
 
 
 def _decimate(y, fs, fmax):
@@ -93,10 +98,9 @@ def _warn_unselected_peaks(y, fs, band, fn_sel, kurt_of):
 
     from ..errors import AccuracyWarning
 
-    f, amp, df = _spectral_peaks(y, fs, band[0], band[1])
-    if not f.size:
+    strong, df = _near_strong_peaks(y, fs, band)
+    if not strong.size:
         return
-    strong = f[amp >= 0.5 * amp.max()]
     fn_sel = np.asarray(fn_sel, dtype=float)
     missed = [fp for fp in strong
               if not np.any(np.abs(fn_sel - fp) <= max(0.01 * fp, 2 * df))]
@@ -113,6 +117,28 @@ def _warn_unselected_peaks(y, fs, band, fn_sel, kurt_of):
         "a mode SSI-cov could not fit): check them with fn_hz=[...]",
         AccuracyWarning, stacklevel=3,
     )
+
+
+def _near_strong_peaks(y, fs, band):
+    """``(f, df)``: the record's strongest spectral peaks in the band (at least half the
+    largest amplitude) and the Welch line spacing."""
+    f, amp, df = _spectral_peaks(y, fs, band[0], band[1])
+    return (f[amp >= 0.5 * amp.max()] if f.size else f), df
+
+
+def _line_kurtosis(y, fs, band, fn_sel, band_kurtosis):
+    """Per selected mode, the lowest band kurtosis (band ``+-0.5 %``) of the strong
+    spectral peaks it explains (within 1 % or 2 lines); NaN when none."""
+    strong, df = _near_strong_peaks(y, fs, band)
+    out = np.full(np.size(fn_sel), np.nan)
+    if not strong.size:
+        return out
+    k = band_kurtosis(y, fs, strong, np.full(strong.size, 0.0025))
+    for m, f in enumerate(np.atleast_1d(fn_sel)):
+        near = np.abs(strong - f) <= max(0.01 * f, 2 * df)
+        if near.any():
+            out[m] = np.nanmin(k[near])
+    return out
 
 
 def _warn_power_below(y, lo, hi, i, fs):
@@ -177,10 +203,11 @@ def ssi_cov(
         end is raised to the lowest frequency the block rows resolve,
         ``fs / (2 n_lags)`` (Rainieri & Fabbrocino 2014, ch. 4: ``i >= fs / (2 f_0)``
         for the lowest frequency ``f_0`` of interest). Without ``n_lags``, ``n_lags``
-        is raised to resolve ``fmin``, or without ``fmin`` 0.9 x the record's lowest
-        spectral peak (:func:`mvtk.signal.find_peaks`), up to 2000 rows of the
-        Toeplitz matrix. A record whose largest spectral line or more than 25 % of whose
-        power lies below the resolved band gives a
+        is raised to resolve ``fmin``, or without ``fmin`` half the record's lowest
+        spectral peak (:func:`mvtk.signal.find_peaks`; an octave below it,
+        :data:`LOWEST_PEAK_FRACTION`), up to 2000 rows of the Toeplitz matrix. A
+        record whose largest spectral line or more than 25 % of whose power lies below
+        the resolved band gives a
         :class:`~mvtk.errors.ResolutionWarning` naming its largest peak there.
     orders : iterable of int
         State-space orders (even; each gives ``n/2`` conjugate pairs).
@@ -188,7 +215,7 @@ def ssi_cov(
         Reference outputs for the correlations (default every channel).
     n_lags : int, optional
         Block rows ``i``. Default: ``max(ceil((max_order + 1) / n_ref), 20)``, raised
-        to ``ceil(fs / (2 f_0))`` with ``f_0`` = ``fmin`` or 0.9 x the lowest spectral
+        to ``ceil(fs / (2 f_0))`` with ``f_0`` = ``fmin`` or 0.5 x the lowest spectral
         peak of the record, at most ``2000 / n_channels``.
     fs : float, optional
         Sampling rate in Hz (derived from ``time`` and checked if given).
@@ -207,6 +234,14 @@ def ssi_cov(
     Rainieri & Fabbrocino, "Operational Modal Analysis of Civil Engineering
     Structures", Springer 2014, ch. 4 (number of block rows).
     """
+    return _ssi_cov(x, fmin, fmax, orders, reference=reference, n_lags=n_lags, fs=fs,
+                    criteria=criteria)[0]
+
+
+def _ssi_cov(x, fmin, fmax, orders, *, reference=None, n_lags=None, fs=None, criteria=None):
+    """:func:`ssi_cov` and the state its uncertainty needs: ``(diagram, state)`` with
+    ``state`` the zero-mean (decimated) outputs ``y``, references ``yr``, block rows
+    ``i``, rate ``fs`` and the SVD ``U, S, Vt`` of the block Toeplitz matrix."""
     from .. import signal
     from ._quality import cmif
 
@@ -236,10 +271,11 @@ def ssi_cov(
     pmax = int(orders.max())
     i = int(n_lags) if n_lags is not None else max(int(np.ceil((pmax + 1) / nr)), 20)
     if n_lags is None:
-        # the lowest frequency to resolve: fmin, or the record's lowest spectral peak
-        # (with 10 % margin, so it lies inside the band, clear of its edge)
+        # the lowest frequency to resolve: fmin, or an octave below the record's
+        # lowest spectral peak (a weaker mode below it that the peak picker missed
+        # stays in the band, and the lags span two periods of that peak)
         f0 = float(fmin) if fmin is not None and float(fmin) > 0 else \
-            0.9 * _lowest_peak_hz(y, fs, fmax)
+            LOWEST_PEAK_FRACTION * _lowest_peak_hz(y, fs, fmax)
         if f0 > 0:
             i = max(i, min(int(np.ceil(fs / (2 * f0))), _MAX_TOEPLITZ_ROWS // nl))
     if i * nr < pmax or i * nl < pmax:
@@ -277,7 +313,7 @@ def ssi_cov(
         a = np.arange(i)
         k = i + a[:, None] - a[None, :]                          # lag index R_{i+a-b}
         T = R[k].transpose(0, 2, 1, 3).reshape(i * nl, i * nr)
-        U, S, _ = np.linalg.svd(T, full_matrices=False)
+        U, S, Vt = np.linalg.svd(T, full_matrices=False)
         per_order = []
         for n in orders:
             O = U[:, :n] * np.sqrt(S[:n])[None, :]
@@ -296,7 +332,8 @@ def ssi_cov(
         band = (f >= lo) & (f <= hi)
         _warn_power_below(y, lo, hi, i, fs)
         ind = cmif(G.values[:, :, band])
-        return poles_to_diagram("SSI-cov", per_order, (lo, hi), f[band], ind, crit)
+        diagram = poles_to_diagram("SSI-cov", per_order, (lo, hi), f[band], ind, crit)
+    return diagram, {"y": y, "yr": yr, "i": i, "fs": fs, "U": U, "S": S, "Vt": Vt}
 
 
 def identify_output_only(
@@ -310,6 +347,7 @@ def identify_output_only(
     n_lags: int | None = None,
     stability: StabilityCriteria | None = None,
     clustering: ClusterCriteria | None = None,
+    n_blocks: int | None = None,
 ) -> IdentifiedModes:
     """Modes of output-only (ambient/operational) records: SSI-cov, selection, shapes.
 
@@ -318,19 +356,60 @@ def identify_output_only(
     there is no FRF synthesis (``frf``, ``synthesised``, ``correlation`` are None).
     Each mode also gets the kurtosis of its band-passed response
     (:func:`mvtk.modal._harmonics.band_kurtosis`): below 2.0 it is marked not reliable
-    as a harmonic (a sinusoid has 1.5, a mode's random response 3).
-    Parameters as in :func:`ssi_cov`; ``fn_hz`` selects the poles nearest those
-    frequencies instead of clustering.
+    as a harmonic (a sinusoid has 1.5, a mode's random response 3). A mode that
+    explains one of the record's strongest spectral lines (within 1 % or 2 lines) gets
+    that line's band kurtosis (band ``+-0.5 %``) when it is lower: a pole between a
+    harmonic and a neighbouring line has a mixed band of its own.
+
+    Uncertainty (``fn_std_hz`` in Hz, ``zeta_std``, ``shape_std`` of the unit-maximum
+    complex shapes): first-order propagation of the covariance of the output
+    correlations to the poles (Reynders, Pintelon & De Roeck 2008) in the block form of
+    Döhler & Mevel (2013). The record is cut into ``n_blocks`` data blocks; the
+    scatter of their Toeplitz matrices estimates the covariance of the record's, and
+    each block's deviation is carried through the SVD, the least-squares shift
+    equation and the eigenvalue problem
+    (:func:`mvtk.modal._ssi_uncertainty.ssi_pole_uncertainty`). The linearisation
+    holds only where the singular values are well separated at the truncation, so each
+    mode is reported from the highest model order among its poles (same mode: within
+    the clustering distance, MAC >= ``1 - dmac``) whose gap there is at least
+    ``GAP_MARGIN`` (2) standard deviations; its frequency, damping, shape and standard
+    deviations then all come from that order. NaN where no order of the mode has such
+    a gap or the record holds fewer than 10 blocks.
+
+    Parameters
+    ----------
+    x, fmin, fmax, orders, reference, n_lags
+        As in :func:`ssi_cov`.
+    fn_hz : sequence of float, optional
+        Select the poles nearest these frequencies (Hz) instead of clustering.
+    stability, clustering : StabilityCriteria, ClusterCriteria, optional
+        Stability and selection criteria.
+    n_blocks : int, optional
+        Data blocks for the covariance (default 50, fewer when a block would be
+        shorter than 20 x ``n_lags`` samples; no uncertainty below 10). Given, it
+        must leave at least 10 blocks of ``8 n_lags`` samples.
+
+    Returns
+    -------
+    IdentifiedModes
+
+    References
+    ----------
+    Reynders, Pintelon & De Roeck, "Uncertainty bounds on modal parameters obtained
+    from stochastic subspace identification", MSSP 22(4) 948-969, 2008.
+    Döhler & Mevel, "Efficient multi-order uncertainty computation for stochastic
+    subspace identification", MSSP 40(2) 464-484, 2013.
     """
     from .. import signal
 
     stab = stability or StabilityCriteria()
     clus = clustering or ClusterCriteria()
     th = signal.as_time_history(x)
-    diagram = ssi_cov(th, fmin, fmax, orders, reference=reference, n_lags=n_lags,
-                      criteria=stab)
+    diagram, state = _ssi_cov(th, fmin, fmax, orders, reference=reference, n_lags=n_lags,
+                              criteria=stab)
     sel = poles_near(diagram, fn_hz) if fn_hz is not None else select_poles(diagram, clus)
     nm = sel.pole.size
+    sel, fn_std, zeta_std, psi_std = _uncertainty(state, diagram, sel, n_blocks, clus)
     fn = np.abs(sel.pole) / (2 * np.pi)
     zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
     psi = sel.vector[:, :th.sizes["channel"]]
@@ -349,6 +428,8 @@ def identify_output_only(
     dirs = [_direction(d) for d in dirs]
     labels = dof_labels(nodes, dirs, names)
     shp = shapes_array(cplx, fn, zeta, labels, nodes, dirs, "unit_max", "SSI-cov")
+    shp_std = shapes_array(psi_std, fn, zeta, labels, nodes, dirs, "unit_max", "SSI-cov")
+    shp_std.name = "shape_std"
     rshp = shapes_array(real, fn, zeta, labels, nodes, dirs, "unit_max", "SSI-cov")
     # one channel: the shape is a single number; MPC and MPD say nothing (NaN)
     mpc_v = mpc(cplx) if len(names) > 1 else np.full(nm, np.nan)
@@ -356,9 +437,12 @@ def identify_output_only(
     from ._harmonics import HARMONIC_KURTOSIS, band_kurtosis
 
     fs = signal.sampling_rate(th)
-    kurt = band_kurtosis(th.values, fs, fn, zeta)
+    y = th.values.astype(float)
+    kurt = band_kurtosis(y, fs, fn, zeta)
+    # a pole between a harmonic and a neighbouring line gets a mixed band; the strong
+    # lines it explains (within 1 % or 2 lines) must be random too
+    kurt = np.fmin(kurt, _line_kurtosis(y, fs, diagram.band_hz, fn, band_kurtosis))
     if fn_hz is None:
-        y = th.values.astype(float)
         _warn_unselected_peaks(y, fs, diagram.band_hz, fn,
                                lambda f: band_kurtosis(y, fs, f, np.full(f.size, 0.0025)))
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
@@ -369,5 +453,82 @@ def identify_output_only(
         participation=None, mpc=mpc_v, mpd=mpd_v, stability_count=sel.count,
         reliable=reliable, reason=reason, frf=None, synthesised=None, correlation=None,
         residue=None, lower_residual=None, upper_residual=None, diagram=diagram,
-        kurtosis=kurt,
+        kurtosis=kurt, fn_std_hz=fn_std, zeta_std=zeta_std, shape_std=shp_std,
     )
+
+
+def _same_mode(diagram, pole, vector, clus):
+    """Physical poles of every order that belong to the mode of ``pole``: within the
+    clustering distance of :class:`ClusterCriteria` (frequency ``cluster_df``, damping
+    ``cluster_dzeta``) and with MAC >= ``1 - dmac`` of their shapes."""
+    f0, z0 = abs(pole) / (2 * np.pi), -pole.real / abs(pole)
+    near = ((diagram.status != "x")
+            & (np.abs(diagram.fn_hz - f0) <= clus.cluster_df * f0)
+            & (np.abs(diagram.zeta - z0) <= clus.cluster_dzeta * max(z0, clus.zeta_floor)))
+    v = diagram.vector
+    num = np.abs(v @ np.conj(vector)) ** 2
+    den = np.sum(np.abs(v) ** 2, axis=1) * np.sum(np.abs(vector) ** 2)
+    return near & (num >= (1 - diagram.criteria.dmac) * np.where(den > 0, den, np.inf))
+
+
+def _uncertainty(state, diagram, sel, n_blocks, clus):
+    """The selected poles at the orders their uncertainty is computed at, and
+    ``(sel, fn_std_hz, zeta_std, shape_std)``.
+
+    Each mode's uncertainty comes from the highest model order among its poles
+    (:func:`_same_mode`) whose singular-value gap at the
+    truncation is at least ``GAP_MARGIN`` standard deviations
+    (:func:`~mvtk.modal._ssi_uncertainty.truncation_margin`: above it the first-order
+    propagation holds), and that order's pole and shape replace the cluster's
+    representative so the table's value and its standard deviation belong to one
+    estimate. NaN when no such order exists or the record holds fewer than
+    ``MIN_BLOCKS`` data blocks.
+    """
+    import dataclasses
+
+    from .._blas import blas_limits
+    from ._ssi_uncertainty import (
+        GAP_MARGIN,
+        MIN_BLOCKS,
+        block_perturbations,
+        default_blocks,
+        ssi_pole_uncertainty,
+        truncation_margin,
+    )
+
+    nm, nl = sel.pole.size, state["y"].shape[0]
+    fstd, zstd = np.full(nm, np.nan), np.full(nm, np.nan)
+    sstd = np.full((nm, nl), np.nan)
+    i = state["i"]
+    nb = default_blocks(state["y"].shape[1], i) if n_blocks is None else int(n_blocks)
+    if n_blocks is not None and (nb < MIN_BLOCKS or
+                                 (state["y"].shape[1] - 2 * i) // nb < 4 * i):
+        raise ParameterError(
+            f"identify_output_only: n_blocks={n_blocks}: expected at least {MIN_BLOCKS} "
+            f"data blocks of at least {8 * i} samples each ({i} block rows); the record "
+            f"has {state['y'].shape[1]} samples")
+    if nm == 0 or nb < MIN_BLOCKS:
+        return sel, fstd, zstd, sstd
+    U, S, Vt = state["U"], state["S"], state["Vt"]
+    with blas_limits():
+        P = block_perturbations(state["y"], state["yr"], i, nb, U, Vt,
+                                int(diagram.orders.max()) + 1)
+        margin = dict(zip(diagram.orders.tolist(),
+                          truncation_margin(U, S, Vt, P, diagram.orders)))
+        pick = np.full(nm, -1)
+        for m in range(nm):
+            cand = np.flatnonzero(_same_mode(diagram, sel.pole[m], sel.vector[m], clus))
+            ok = cand[[margin[int(o)] >= GAP_MARGIN for o in diagram.order[cand]]]
+            if ok.size:
+                top = ok[diagram.order[ok] == diagram.order[ok].max()]
+                pick[m] = top[np.argmin(np.abs(diagram.pole[top] - sel.pole[m]))]
+        have = pick >= 0
+        pole, vector, order = sel.pole.copy(), sel.vector.copy(), sel.order.copy()
+        pole[have], vector[have] = diagram.pole[pick[have]], diagram.vector[pick[have]]
+        order[have] = diagram.order[pick[have]]
+        for o in np.unique(order[have]):
+            m = np.flatnonzero(have & (order == o))
+            fstd[m], zstd[m], sstd[m] = ssi_pole_uncertainty(U, S, Vt, P, nl, int(o),
+                                                             state["fs"], pole[m])
+    sel = dataclasses.replace(sel, pole=pole, vector=vector, order=order)
+    return sel, fstd, zstd, sstd

@@ -8,6 +8,8 @@ Civil Engineering Structures, Springer 2014, ch. 4).
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import scipy.ndimage
@@ -45,15 +47,58 @@ def test_block_rows_set_the_band_and_warn_about_what_lies_below(oversampled):
 
 def test_default_block_rows_resolve_the_lowest_spectral_peak(oversampled, msys):
     th, fn, z = oversampled
-    # default: i = ceil(fs / (2 x 0.9 x 14.3 Hz)) = 249 block rows (1245 Toeplitz rows)
+    # default: i = ceil(fs / (2 x 0.5 x 14.3 Hz)) = 448 block rows, capped at 2000
+    # Toeplitz rows (400 block rows: the band starts at 8 Hz)
     import warnings
 
     with warnings.catch_warnings():
         warnings.simplefilter("error", ResolutionWarning)
         res = modal.identify_output_only(th, orders=range(2, 41, 2))
-    assert 0.85 * fn.min() < res.diagram.band_hz[0] < fn.min()
+    assert res.diagram.band_hz[0] == pytest.approx(FS_HIGH / (2 * 400))
     j = msys.match(res.fn_hz, fn)
     assert np.max(np.abs(res.fn_hz[j] - fn) / fn) < 2e-3
+
+
+def _three_modes(first_amplitude, seed, fs=400.0, n=2**17):
+    """Ambient response of three modes (10.0, 11.5, 30.0 Hz, zeta 1 %) by modal
+    synthesis: independent white modal forces, the first ``first_amplitude`` times
+    the others', 3 channels, 2 % sensor noise."""
+    fn = np.array([10.0, 11.5, 30.0])
+    amp = np.array([first_amplitude, 1.0, 1.0])
+    phi = np.array([[1, 0.5, -0.3], [0.2, 1, 0.8], [-0.7, 0.4, 1.0]])
+    rng = np.random.default_rng(seed)
+    w, wn = 2 * np.pi * np.fft.rfftfreq(n, 1 / fs), 2 * np.pi * fn
+    P = np.fft.rfft(rng.standard_normal((3, n)), axis=1) * (amp * wn**2)[:, None]
+    Q = P / (wn[:, None] ** 2 - w**2 + 2j * 0.01 * wn[:, None] * w)
+    y = np.fft.irfft(phi.T @ Q, n, axis=1)
+    y += 0.02 * y.std(axis=1, keepdims=True) * rng.standard_normal(y.shape)
+    return io.time_history(y, fs, ["a", "b", "c"], "m", "displacement", node=[1, 2, 3],
+                           direction="z")
+
+
+@pytest.mark.parametrize("seed", [0, 2])
+def test_default_band_keeps_a_first_mode_near_the_lowest_peak(seed):
+    """The first mode (10 Hz, a third of the others' modal force) is the record's lowest
+    spectral peak and lies 13 % below a strong second mode. Block rows resolving 0.9 x
+    that peak (23 rows: the band starts 13 % below it and the lags span 1.15 of its
+    periods) missed it in 2 of 5 records (seeds 0-4; these two) and gave it twice the
+    std in the others; the default, an octave below (41 rows), found it in all 5."""
+    from mvtk.modal._ssi import _spectral_peaks
+
+    th = _three_modes(0.3, seed)
+    peaks = _spectral_peaks(th.values, 400.0)[0]
+    assert peaks.min() == pytest.approx(10.0, rel=0.01)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        old = modal.identify_output_only(
+            th, orders=range(2, 31, 2), n_lags=int(np.ceil(400.0 / (2 * 0.9 * peaks.min()))))
+        res = modal.identify_output_only(th, orders=range(2, 31, 2))
+    assert not np.any(np.abs(old.fn_hz - 10.0) < 0.1)
+    assert res.diagram.band_hz[0] <= 0.5 * peaks.min()
+    k = int(np.argmin(np.abs(res.fn_hz - 10.0)))
+    assert abs(res.fn_hz[k] - 10.0) < 0.01 * 10.0 and res.reliable[k]
+    assert abs(res.zeta[k] - 0.01) < 3 * res.zeta_std[k]
+    assert abs(res.fn_hz[k] - 10.0) < 3 * res.fn_std_hz[k]
 
 
 def test_fmax_decimates_and_recovers_the_modes(oversampled, msys):
@@ -93,9 +138,10 @@ def test_ambient_microphone_record_states_what_it_cannot_see(shared_data):
     assert res.diagram.band_hz[0] == pytest.approx(65536.0 / (2 * 61), rel=1e-3)
     assert np.all(res.fn_hz >= res.diagram.band_hz[0])
     assert np.all(np.isnan(res.mpc))
-    # by default the block rows reach below the lowest spectral peak (29.5 Hz)
+    # by default the block rows reach an octave below the lowest spectral peak
+    # (29.5 Hz), up to the 2000-row cap (16.4 Hz)
     res = modal.identify_output_only(th)
-    assert 20.0 < res.diagram.band_hz[0] < 29.0
+    assert res.diagram.band_hz[0] == pytest.approx(65536.0 / (2 * 2000), rel=1e-3)
     assert res.fn_hz.min() < 35.0
 
 
@@ -103,9 +149,10 @@ def test_ambient_microphone_record_states_what_it_cannot_see(shared_data):
 @pytest.mark.slow
 def test_wind_turbine_tower_against_pyoma2(shared_data):
     """good_tdms_1.tdms: 10 min of 8 tower accelerometers of an offshore wind turbine at
-    30 Hz (PROVENANCE.md). The default block rows (45, from the lowest spectral peak at
-    0.375 Hz) reach the first tower modes; the 20 rows of the model orders alone start
-    the band at 0.75 Hz and miss them. Peer: pyOMA-2 SSIcov with the same block rows."""
+    30 Hz (PROVENANCE.md). The default block rows (81, an octave below the lowest
+    spectral peak at 0.375 Hz) reach the first tower modes; the 20 rows of the model
+    orders alone start the band at 0.75 Hz and miss them. Peer: pyOMA-2 SSIcov with 45
+    block rows."""
     pytest.importorskip("pyoma2", reason="pyOMA-2 (test extra) is not installed")
     import logging
 
@@ -114,7 +161,7 @@ def test_wind_turbine_tower_against_pyoma2(shared_data):
 
     th = _shared_record(shared_data, "tdms/good_tdms_1.tdms")
     res = modal.identify_output_only(th)
-    assert res.diagram.band_hz[0] == pytest.approx(30.0 / (2 * 45))
+    assert res.diagram.band_hz[0] == pytest.approx(30.0 / (2 * 81))
     ok = res.reliable
     fn = res.fn_hz[ok]
     assert fn.min() == pytest.approx(0.3725, abs=0.002)
@@ -170,9 +217,17 @@ def test_a_strong_peak_without_a_mode_is_named(msys):
 
 
 @pytest.mark.shared_data
-def test_operational_record_names_its_unselected_harmonic(shared_data):
-    # MPSTD_Set001: four accelerometers at 3200 Hz; the strongest lines, 181.7 and
-    # 182.8 Hz, are not modes SSI-cov can stabilise; the first is a clean sinusoid
+def test_operational_record_names_its_harmonic(shared_data):
+    # MPSTD_Set001: four accelerometers at 3200 Hz; the strongest lines are 181.7 Hz (a
+    # clean sinusoid, band kurtosis 1.63) and 182.8 Hz. The default block rows (an octave
+    # below the lowest peak) stabilise one lightly damped pole between them (182.14 Hz,
+    # zeta 0.06 %) whose own band mixes both lines (kurtosis 2.25): the harmonic line it
+    # explains marks it a harmonic
     th = _shared_record(shared_data, "uff/MPSTD_Set001_2024_10_08_10_27_07.uff")
-    with pytest.warns(AccuracyWarning, match=r"181\.\d Hz \(band kurtosis 1\.\d+: a harmonic\)"):
-        modal.identify_output_only(th)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = modal.identify_output_only(th)
+    near = np.abs(res.fn_hz - 181.7) <= 0.01 * 181.7
+    assert near.sum() == 1
+    assert not res.reliable[near][0] and np.asarray(res.reason)[near][0].startswith("harmonic")
+    assert res.kurtosis[near][0] == pytest.approx(1.63, abs=0.05)
