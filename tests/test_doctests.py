@@ -73,10 +73,6 @@ NO_EXAMPLE_YET = {
         "ImpactPolicy", "SetQuality", "set_quality", "AmplitudeCurves", "PeakResult",
         "auto_segment",
     ),
-    "mvtk.damping": (
-        "DampingEstimate", "DecayResult", "HalfPowerResult", "damping_vs_amplitude",
-        "RayleighFit", "envelope_fit", "estimate", "half_power_zeta", "rayleigh_zeta",
-    ),
     "mvtk.modal": (
         "ClusterCriteria", "IdentifiedModes", "LsfdFit", "SelectedPoles",
         "StabilisationDiagram", "StabilityCriteria", "as_frf_matrix", "cmif",
