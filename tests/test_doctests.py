@@ -74,12 +74,8 @@ NO_EXAMPLE_YET = {
         "auto_segment",
     ),
     "mvtk.modal": (
-        "ClusterCriteria", "IdentifiedModes", "LsfdFit", "SelectedPoles",
-        "StabilisationDiagram", "StabilityCriteria", "as_frf_matrix", "cmif",
-        "convert_frf", "exact_frf", "exact_modes", "frf_matrix", "frf_of_sets",
-        "identify_output_only", "lsfd", "mac", "merge_frf", "mpc", "mpd", "plscf",
-        "poles_near", "reciprocal", "select_poles", "ssi_cov", "synthesise",
-        "write_frf_uff", "write_modes_uff",
+        "ClusterCriteria", "LsfdFit", "SelectedPoles", "StabilisationDiagram",
+        "StabilityCriteria",
     ),
     "mvtk.fe": (
         "FEModel", "EigenSolution", "eigsh_lowest", "factorize", "Factorization",

@@ -227,6 +227,16 @@ def select_poles(diagram: StabilisationDiagram, criteria: ClusterCriteria | None
     Criteria (see :class:`ClusterCriteria`): only poles with status ``"s"`` enter; a
     cluster must span enough model orders; its representative is the member closest to
     the cluster median in frequency and damping. Returns the poles sorted by frequency.
+
+    Examples
+    --------
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> sel = select_poles(modal.plscf(h, 2.0, 110.0, orders=range(2, 21)))
+    >>> np.round(np.abs(sel.pole) / (2 * np.pi), 3)      # Hz
+    array([31.105, 81.434])
     """
     crit = criteria or ClusterCriteria()
     stable = np.flatnonzero(diagram.status == "s")
@@ -286,6 +296,18 @@ def poles_near(diagram: StabilisationDiagram, fn_hz, *, tol: float = 0.05) -> Se
     ------
     ParameterError
         No physical pole lies within ``tol`` of a requested frequency.
+
+    Examples
+    --------
+    Pick the poles nearest 31 and 81.5 Hz instead of clustering:
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> sel = poles_near(modal.plscf(h, 2.0, 110.0, orders=range(2, 21)), [31.0, 81.5])
+    >>> np.round(np.abs(sel.pole) / (2 * np.pi), 3)
+    array([31.105, 81.434])
     """
     rank = {"s": 0, "d": 1, "v": 1, "f": 2, "o": 3}
     fn = diagram.fn_hz
