@@ -55,7 +55,15 @@ _UFF_DIR = {1: "+x", 2: "+y", 3: "+z", 4: "+rx", 5: "+ry", 6: "+rz",
 
 
 def direction_label(code: int | str) -> str:
-    """Convention direction name of a UFF code (``3`` -> ``"+z"``) or a name (``"z"``)."""
+    """Convention direction name of a UFF code (``3`` -> ``"+z"``) or a name (``"z"``).
+
+    Examples
+    --------
+    UFF direction codes 1..6 are +x..+rz, negative codes the opposite directions:
+
+    >>> direction_label(3), direction_label("z"), direction_label(-4)
+    ('+z', '+z', '-rx')
+    """
     if isinstance(code, str):
         s = code.strip().lower()
         if s and s[0] not in "+-":
@@ -559,6 +567,17 @@ def read_test_geometry(source: str | Path | Mapping[str, Any], *, units_scale: f
         Unreadable file; the message names the file and the record, row or key.
     UnsupportedFormatError
         Unknown file extension.
+
+    Examples
+    --------
+    A geometry given as a mapping (the layout of a TOML file): three nodes along x (m)
+    with one +z sensor each:
+
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> geo.node.tolist(), [(s.node, s.direction) for s in geo.sensors]
+    ([1, 2, 3], [(1, '+z'), (2, '+z'), (3, '+z')])
     """
     if isinstance(units_scale, bool) or not isinstance(units_scale, int | float) or not (
             np.isfinite(units_scale) and units_scale > 0):
