@@ -96,10 +96,7 @@ NO_EXAMPLE_YET = {
         "ExpansionResult", "PlacementResult",
     ),
     "mvtk.updating": (
-        "Parameter", "get_path", "set_path", "with_values", "FrequencyTarget",
-        "targets_from_modal_result", "targets_from_shapes", "mac", "classify_modes",
-        "pair_modes", "pair_by_frequency", "target_mac", "Pairing", "eigen_sensitivity",
-        "Sensitivity", "update", "UpdateResult", "HistoryEntry",
+        "Pairing", "Sensitivity", "HistoryEntry",
     ),
     "mvtk.reduction": (
         "SuperElement", "guyan", "reduced_modes", "ReducedModes",

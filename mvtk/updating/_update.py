@@ -675,6 +675,19 @@ class UpdateResult:
         wrong one although its local Jacobian looks regular.
     initial_null_directions : tuple of dict
         Null directions of the frequency Jacobian at the initial values.
+
+    Examples
+    --------
+    Returned by :func:`update`; ``to_dataframe`` lists the targets before and after:
+
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> res = update(beam, ["materials.steel.E"], [19.0], n_modes=2)
+    >>> res.success, res.to_dataframe()[["target_hz", "updated_hz"]].round(3).values.tolist()
+    (True, [[19.0, 19.0]])
     """
 
     description: dict
@@ -1088,6 +1101,24 @@ def update(
     ``A^-1 J_d' Sigma J_d A^-1`` with ``A = J'J`` (data and regularisation rows) and
     ``Sigma`` the residual covariance (Friswell & Mottershead, Finite Element Model
     Updating in Structural Dynamics, 1995, ch. 7).
+
+    Examples
+    --------
+    Young's modulus of a steel cantilever (300 x 20 x 2 mm) updated to a measured first
+    frequency 10 % stiffer than the model's (f ~ sqrt(E), so E must grow by 10 %):
+
+    >>> from mvtk.fe import build_model, modal_analysis
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> f1 = modal_analysis(build_model(beam), 1).fn_hz[0]            # 18.566 Hz
+    >>> res = update(beam, ["materials.steel.E"], [f1 * np.sqrt(1.1)], n_modes=2)
+    >>> round(float(res.values[0]) / 2.1e11, 4)
+    1.1
+    >>> round(res.description["materials"]["steel"]["E"] / 1e9, 3)     # GPa
+    231.0
     """
     from scipy.optimize import least_squares
 
