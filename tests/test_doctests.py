@@ -109,9 +109,7 @@ NO_EXAMPLE_YET = {
         "LoopMargins", "ComparisonResult", "run_control_section",
     ),
     "mvtk.io": (
-        "read", "open_campaign", "write", "validate", "time_history", "time_axis",
-        "register_reader", "list_formats", "detect_format", "normalize_units",
-        "infer_quantity", "fs_from_dt",
+        "register_reader",
     ),
     "mvtk.plot": (
         "figure_to_png", "minmax_decimate", "plot_decay", "plot_mode_shapes",
