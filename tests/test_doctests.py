@@ -111,12 +111,6 @@ NO_EXAMPLE_YET = {
     "mvtk.io": (
         "register_reader",
     ),
-    "mvtk.plot": (
-        "figure_to_png", "minmax_decimate", "plot_decay", "plot_mode_shapes",
-        "plot_time_responses", "plot_spectra", "plot_mac", "plot_paired_shapes",
-        "plot_test_on_mesh", "plot_stabilisation", "plot_frf_synthesis", "plot_automac",
-        "plot_fn_histogram",
-    ),
 }
 
 
