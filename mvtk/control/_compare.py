@@ -82,6 +82,19 @@ class ComparisonResult:
     ``min_closed_loop_zeta``, ``gain_margin_db``, ``phase_margin_deg``,
     ``critical_gain_factor``, ``critical_gain``, ``stability_source``,
     ``stability_reason``. The open-loop row carries the plant's own verdict (no margins).
+
+    Examples
+    --------
+    Returned by :func:`compare_controllers`; ``to_dataframe`` gives one row per
+    controller:
+
+    >>> from mvtk.control import Scenario, VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> res = compare_controllers(plant, {"VF": VelocityFeedback(gain=1e-3)},
+    ...                           Scenario(output="tip", t_end=4.0, fs_out=200.0))
+    >>> res.to_dataframe().index.tolist(), sorted(res.simulations)
+    (['open loop', 'VF'], ['VF', 'open loop'])
     """
 
     rows: tuple[dict, ...]
@@ -288,6 +301,21 @@ def run_control_section(plant, section: Mapping) -> ComparisonResult:
         method = "auto"                     # optional per controller, see simulate()
 
     ``controllers`` may also be a table of tables keyed by name.
+
+    Examples
+    --------
+    The ``[control]`` table of a study as a mapping; velocity feedback adds
+    ``G w / 2`` = 0.0314 to the 1 % of the mode:
+
+    >>> from mvtk.control import modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> res = run_control_section(plant, {
+    ...     "sensor_node": "tip", "initial_tip_displacement_m": 1e-3, "t_end_s": 4.0,
+    ...     "fs_out": 200.0,
+    ...     "controllers": [{"name": "VF", "type": "VelocityFeedback", "gain": 1e-3}]})
+    >>> [(r["controller"], round(r["zeta1"], 4)) for r in res.rows]
+    [('open loop', 0.01), ('VF', 0.0414)]
     """
     if not isinstance(section, Mapping):
         raise ConfigError(f"[control] must be a table, got {type(section).__name__}")
