@@ -393,6 +393,21 @@ class RigidLink:
         stiffness of the structure (no added stiffness) and carries forces and moments
         applied at the reference node to the nodes, as Nastran's RBE3 with translational
         components (123) at the independent nodes.
+
+    Examples
+    --------
+    A 2 kg mass at node 1, carried rigidly by node 0 on a 1e5 N/m spring (only uz of
+    node 0 free): node 1 follows node 0, one DOF remains, and its own weight deflects
+    it by ``m g / k`` = 0.196 mm:
+
+    >>> from mvtk.fe import gravity_load, static_solve
+    >>> nodes = np.array([[0.0, 0.0, 0.0], [0.1, 0.0, 0.0]])
+    >>> model = assemble_model(nodes, [PointMass(1, 2.0), Spring(0, {"uz": 1e5}),
+    ...                                RigidLink(0, [1])],
+    ...                        supports={"base": ["ux", "uy", "rx", "ry", "rz"]},
+    ...                        node_sets={"base": [0]})
+    >>> model.n_dof, round(float(static_solve(model, gravity_load(model))[0]) * 1e3, 4)
+    (1, -0.1961)
     """
 
     independent: int
@@ -437,6 +452,15 @@ def support_dofs(nodes: np.ndarray, node_set: np.ndarray, kind: Any, where: str 
         Name used in error messages.
     normal : ndarray (3,), optional
         Shell normal at the set (needed by ``simply_supported_hard``).
+
+    Examples
+    --------
+    Clamping nodes 0 and 4 fixes their six components each (``node * 6 + component``):
+
+    >>> from mvtk.fe import rectangular_plate_mesh
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=3, ny=2)
+    >>> support_dofs(mesh.nodes, np.array([0, 4]), "clamped")
+    array([ 0,  1,  2,  3,  4,  5, 24, 25, 26, 27, 28, 29])
     """
     node_set = np.asarray(node_set, dtype=np.int64)
     comps = []

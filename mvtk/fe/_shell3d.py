@@ -102,6 +102,19 @@ def shell_frames(xyz: np.ndarray, material_axis=(1.0, 0.0, 0.0)) -> np.ndarray:
     ------
     ParameterError
         If an element is degenerate (zero area).
+
+    Examples
+    --------
+    A square in the x-y plane has the global axes as its frame; a square in the y-z plane
+    with the material axis along y gets ``e1 = y``, ``e3 = x``:
+
+    >>> np.round(shell_frames(np.array([[[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]]])), 6) + 0.0
+    array([[[1., 0., 0.],
+            [0., 1., 0.],
+            [0., 0., 1.]]])
+    >>> square_yz = np.array([[[0, 0, 0], [0, 1, 0], [0, 1, 1], [0, 0, 1.0]]])
+    >>> np.round(shell_frames(square_yz, material_axis=(0, 1, 0))[0, 2], 6) + 0.0
+    array([1., 0., 0.])
     """
     xyz = np.asarray(xyz, dtype=float)
     if xyz.ndim != 3 or xyz.shape[1] not in (3, 4) or xyz.shape[2] != 3:

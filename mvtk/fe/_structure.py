@@ -610,6 +610,21 @@ def constrain_model(model: FEModel, supports: Mapping[str, Any],
         :data:`mvtk.fe.GENERAL_SUPPORTS` or a list of DOF names
     springs : sequence of SpringSupport
         ``per_length`` is not used here (springs per node).
+
+    Examples
+    --------
+    Propping the tip of the steel cantilever (uz fixed) turns it into a clamped-pinned
+    beam: ``f1 = 3.9266**2 / (2 pi) sqrt(E I / (rho A L**4))`` = 81.4 Hz:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> propped = constrain_model(beam, {"tip": ["uz"]}, [])
+    >>> propped.n_dof, np.round(modal_analysis(propped, 1).fn_hz, 1)
+    (119, array([81.4]))
+    >>> E, I, A = 2.1e11, 0.02 * 0.002**3 / 12, 0.02 * 0.002
+    >>> round(3.92660231**2 / (2 * np.pi) * float(np.sqrt(E * I / (7850.0 * A * 0.3**4))), 1)
+    81.4
     """
     if not supports and not springs:
         return model
