@@ -92,6 +92,14 @@ class ModalProperties:
 
     One entry per oscillatory pair (positive imaginary part) and per real eigenvalue,
     sorted by frequency.
+
+    Examples
+    --------
+    Returned by :func:`modal_properties` and :func:`closed_loop_modes`:
+
+    >>> m = modal_properties([-1.0 + 10.0j, -1.0 - 10.0j])
+    >>> np.round(m.fn_hz, 4), np.round(m.zeta, 4)      # |lambda| / 2 pi, -Re / |lambda|
+    (array([1.5995]), array([0.0995]))
     """
 
     fn_hz: np.ndarray
@@ -427,6 +435,19 @@ class SpilloverResult:
         ``open_fn_hz`` and ``residual`` (True when that plant mode has no counterpart
         within 1 % in frequency among the design plant's modes: spillover onto a
         residual mode).
+
+    Examples
+    --------
+    Returned by :func:`spillover_check`:
+
+    >>> from mvtk.control import VelocityFeedback, modal_plant
+    >>> design = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                      inputs=["force"], outputs=["tip"])
+    >>> full = modal_plant([10.0, 60.0], 0.01, B=np.array([[1.0], [1.0]]),
+    ...                    Cq=np.array([[1.0, 1.0]]), inputs=["force"], outputs=["tip"])
+    >>> res = spillover_check(VelocityFeedback(gain=1e-3), design, full)
+    >>> res.design.fn_hz.size, res.evaluation.fn_hz.size, res.verdict_evaluation.verdict
+    (1, 2, 'stable')
     """
 
     design: ModalProperties

@@ -46,6 +46,18 @@ class StructuralPlant(SecondOrderSystem):
     ``y = Cq q + Cv q' + D u``. ``D`` is zero unless modes were truncated with static
     correction. :meth:`to_state_space` carries ``D`` into the :class:`StateSpace`.
     Controllers that only use ``M, C, K, B`` see the truncated modal model.
+
+    Examples
+    --------
+    Returned by :func:`structural_plant`; ``to_state_space`` carries the feedthrough ``D``:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(IsotropicMaterial("steel", 2.1e11, 0.3,
+    ...                                                          7850.0), 2e-3)], n_elements=10)
+    >>> plant = structural_plant(beam, {"force": (10, "uz")}, {"tip": (10, "uz")},
+    ...                          form="modal", n_modes=3, modal_damping=0.01)
+    >>> plant.M.shape, plant.D.shape
+    ((3, 3), (1, 1))
     """
 
     D: np.ndarray | None = None

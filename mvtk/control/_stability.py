@@ -99,6 +99,14 @@ class StabilityVerdict:
         One line naming the offending pole or the trajectory figure.
     trajectory : dict
         Energy figures of the simulated trajectory (see :func:`trajectory_stability`).
+
+    Examples
+    --------
+    Returned by :func:`stability_verdict` and the stability checks:
+
+    >>> v = stability_verdict([0.1 + 10j, 0.1 - 10j, -1.0 + 20j, -1.0 - 20j])
+    >>> v.verdict, v.offending.tolist(), v.max_real_pole
+    ('unstable', [(0.1+10j)], 0.1)
     """
 
     verdict: str
@@ -255,6 +263,17 @@ class LoopMargins:
     phase_crossovers, gain_crossovers : ndarray
         All crossover frequencies (rad/s); ``all_gain_margins``, ``all_phase_margins_deg``
         the margins there.
+
+    Examples
+    --------
+    Returned by :func:`loop_margins`:
+
+    >>> from mvtk.control import VelocityFeedback, loop_margins, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> m = loop_margins(plant, VelocityFeedback(gain=1e-3))
+    >>> m.gain_margin_db, m.critical_gain_factor
+    (inf, inf)
     """
 
     gain_margin: float

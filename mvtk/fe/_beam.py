@@ -477,6 +477,19 @@ class BeamPatch:
         touching the base).
     width : float, optional
         Width of the patch layers (m), centred on the beam axis; default the beam width.
+
+    Examples
+    --------
+    A PZT layer from x = 50 to 100 mm on top of a cantilever: the patch edges become mesh
+    points with node sets ``patch:<name>:x0`` and ``patch:<name>:x1``:
+
+    >>> from mvtk.fe import IsotropicMaterial, PiezoMaterial, Ply
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20,
+    ...                        patches=[BeamPatch("p", 0.05, 0.10, layers=(Ply(pzt, 2e-4),))])
+    >>> sorted(s for s in beam.node_sets if s.startswith("patch"))
+    ['patch:p', 'patch:p:x0', 'patch:p:x1']
     """
 
     name: str

@@ -98,6 +98,19 @@ def ply_piezo_constants(ply) -> tuple[np.ndarray, float | None]:
     ``ebar = T' Q d`` with ``Q`` the plane-stress stiffness in ply axes, ``d = (d31, d32,
     0)`` and ``T`` the strain rotation by the ply angle (see :mod:`mvtk.fe._laminate`);
     ``eps33_S = eps33^T - d' Q d`` (None when the material has no ``eps33``).
+
+    Examples
+    --------
+    A PZT ply at 0 deg: ``ebar = Q d`` gives ``e31 = E d31 / (1 - nu)`` (C/m^2) in both
+    in-plane directions, and ``eps33_S = eps33_T - 2 d31**2 E / (1 - nu)`` (F/m):
+
+    >>> from mvtk.fe import PiezoMaterial, Ply
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10, eps33=2.1e-8)
+    >>> ebar, eps33_s = ply_piezo_constants(Ply(pzt, 2e-4))
+    >>> np.round(ebar, 3), round(6.7e10 * -2.1e-10 / (1 - 0.34), 3)
+    (array([-21.318, -21.318,   0.   ]), -21.318)
+    >>> round(eps33_s * 1e9, 4), round((2.1e-8 - 2 * 2.1e-10**2 * 6.7e10 / 0.66) * 1e9, 4)
+    (12.0464, 12.0464)
     """
     m = ply.material
     if not is_piezo(m):

@@ -263,6 +263,19 @@ class StaticSolution:
         Global nodal displacements (m) and rotations (rad).
     reaction : ndarray (n_nodes, 6)
         Global reaction forces (N) and moments (N m) at the supports (zero elsewhere).
+
+    Examples
+    --------
+    Returned by :func:`static_solution`; displacements and reactions per node, global axes:
+
+    >>> from mvtk.fe import PointMass, Spring, assemble_model
+    >>> model = assemble_model(np.zeros((1, 3)), [PointMass(0, 2.0), Spring(0, {"uz": 1e5})],
+    ...                        supports={"base": ["ux", "uy"]}, node_sets={"base": [0]})
+    >>> forces = np.zeros((1, 6))
+    >>> forces[0, 2] = -10.0                                     # N
+    >>> sol = static_solution(model, forces)
+    >>> round(float(sol.displacement[0, 2]) * 1e3, 6), sol.reaction.shape   # mm: F / k
+    (-0.1, (1, 6))
     """
 
     displacement: np.ndarray

@@ -185,6 +185,16 @@ class OrthotropicPiezoMaterial(OrthotropicMaterial):
         direction (m/V).
     eps33 : float, optional
         Permittivity at constant stress (F/m).
+
+    Examples
+    --------
+    A d31-type macro-fibre composite (elastic constants in Pa, d31/d32 in m/V):
+
+    >>> mfc = OrthotropicPiezoMaterial("MFC", E1=30.336e9, E2=15.857e9, G12=5.515e9,
+    ...                                G13=5.515e9, G23=5.515e9, nu12=0.31, rho=5440.0,
+    ...                                d31=-1.7e-10, d32=1.3e-10)
+    >>> is_piezo(mfc), round(mfc.nu21, 4)
+    (True, 0.162)
     """
 
     d31: float = 0.0

@@ -59,6 +59,15 @@ class Patch:
     name : str
     x0, x1, y0, y1 : float
         Extent (m), ``0 <= x0 < x1 <= length`` and ``0 <= y0 < y1 <= width``.
+
+    Examples
+    --------
+    A 100 x 100 mm region of a plate carrying its own layers (see :func:`mvtk.fe.plate_model`):
+
+    >>> p = Patch("act", x0=0.05, x1=0.15, y0=0.05, y1=0.15)      # m
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4, patches=[p])
+    >>> int((mesh.element_region == 1).sum())                    # elements inside it
+    4
     """
 
     name: str
@@ -84,6 +93,14 @@ class PlateMesh:
         Mesh line coordinates (m).
     patches : tuple of Patch
     node_sets : dict of str to ndarray
+
+    Examples
+    --------
+    Returned by :func:`rectangular_plate_mesh`:
+
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=3, ny=2)
+    >>> mesh.nodes.shape, mesh.elements[0].tolist(), mesh.y_lines.tolist()
+    ((12, 3), [0, 3, 4, 1], [0.0, 0.1, 0.2])
     """
 
     nodes: np.ndarray
@@ -149,6 +166,14 @@ class ModelSize:
         sharing an element couples 6 x 6 DOFs).
     bytes : int
         Estimated peak memory of the assembly (element matrices, sparsity pattern, K and M).
+
+    Examples
+    --------
+    Returned by :func:`estimate_plate_size`:
+
+    >>> s = estimate_plate_size(0.3, 0.2, nx=3, ny=2)
+    >>> s.n_nodes, s.n_elements, s.n_dof
+    (12, 6, 72)
     """
 
     n_nodes: int

@@ -306,6 +306,20 @@ def edge_moment_load(
         Unknown component or node set, bad node indices, overlapping edges, a missing
         width for a single-node edge, or when the moment DOFs of both edges are all
         constrained (the load would vanish).
+
+    Examples
+    --------
+    Equal and opposite line moments of 1 N m/m on the two edges of a 20 mm wide patch:
+    0.02 N m at each edge, no net moment:
+
+    >>> from mvtk.fe import BeamPatch, IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20,
+    ...                        patches=[BeamPatch("p", 0.05, 0.10, layers=(Ply(steel, 1e-4),))])
+    >>> f = edge_moment_load(beam, beam.node_sets["patch:p:x0"], beam.node_sets["patch:p:x1"],
+    ...                      1.0, component="ry", width=0.02)
+    >>> np.round(f[f != 0], 6), float(f.sum())
+    (array([-0.02,  0.02]), 0.0)
     """
     if component not in ("rx", "ry", "rz"):
         raise ParameterError(
@@ -391,6 +405,23 @@ class PiezoPatch:
     layer_widths : tuple of float, optional
         Widths of all layers of ``layers`` (m) when they differ (patch narrower than
         the substrate); ``layer_widths[piezo_index]`` must equal ``width``.
+
+    Examples
+    --------
+    A 0.2 mm PZT layer on a 2 mm steel strip, 20 mm wide, between the patch edges of a
+    cantilever: the load per volt is the moment pair ``M_p / V`` of
+    :func:`piezo_moment_per_volt` at the two edges:
+
+    >>> from mvtk.fe import BeamPatch, IsotropicMaterial, PiezoMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10)
+    >>> stack = (Ply(steel, 2e-3), Ply(pzt, 2e-4))
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20,
+    ...                        patches=[BeamPatch("p", 0.05, 0.10, layers=stack[1:])])
+    >>> patch = PiezoPatch("p", stack, 1, ("patch:p:x0", "patch:p:x1"), width=0.02)
+    >>> f = patch.load_vector(beam)                                 # N m per V
+    >>> np.round(f[f != 0] * 1e6, 2), round(piezo_moment_per_volt(stack, 1, width=0.02) * 1e6, 2)
+    (array([ 299.97, -299.97]), -299.97)
     """
 
     name: str

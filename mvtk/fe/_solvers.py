@@ -327,6 +327,16 @@ class Factorization:
         Symmetric permutation applied before SuperLU (None: SuperLU's own ordering).
     n_solves : int
         Number of right-hand sides solved so far.
+
+    Examples
+    --------
+    Returned by :func:`factorize`; ``solve`` takes a vector or a matrix of right-hand sides:
+
+    >>> import scipy.sparse as sp
+    >>> K = sp.diags([-np.ones(49), 2 * np.ones(50), -np.ones(49)], [-1, 0, 1], format="csc")
+    >>> fac = factorize(K)
+    >>> fac.solve(np.ones((50, 2))).shape, fac.shape
+    ((50, 2), (50, 50))
     """
 
     def __init__(self, backend: str, shape, solver, perm=None, lu=None):
@@ -691,6 +701,16 @@ class EigenSolution:
         Factorisation backend (``"superlu"``, ``"cholmod"`` or ``"dense"``).
     method : str
         Eigen solver: ``"arpack"``, ``"block"`` (block Lanczos) or ``"dense"``.
+
+    Examples
+    --------
+    Returned by :func:`eigsh_lowest`, with the work done:
+
+    >>> import scipy.sparse as sp
+    >>> K = sp.diags([-np.ones(49), 2 * np.ones(50), -np.ones(49)], [-1, 0, 1], format="csc")
+    >>> sol = eigsh_lowest(K, sp.identity(50, format="csc"), 3)
+    >>> sol.vectors.shape, sol.n_factorizations
+    ((50, 3), 1)
     """
 
     omega2: np.ndarray
@@ -1013,6 +1033,16 @@ class MemoryEstimate:
         vectors.
     total : int
         ``matrices + solve``.
+
+    Examples
+    --------
+    Returned by :func:`estimate_eigen_memory` (bytes):
+
+    >>> import scipy.sparse as sp
+    >>> K = sp.diags([-np.ones(49), 2 * np.ones(50), -np.ones(49)], [-1, 0, 1], format="csc")
+    >>> est = estimate_eigen_memory(K, 3)
+    >>> est.total == est.matrices + est.solve
+    True
     """
 
     n_dof: int

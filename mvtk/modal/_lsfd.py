@@ -19,6 +19,20 @@ class LsfdFit:
 
     ``H(w) = (i w)^k [ sum_m A_m / (i w - lambda_m) + conj(A_m) / (i w - conj(lambda_m))
     + LR / (i w)^2 + UR ]`` with ``k`` = 0, 1, 2 for receptance, mobility, accelerance.
+
+    Examples
+    --------
+    Returned by :func:`lsfd`: receptance residues (mode, response, reference) and the
+    lower and upper residuals per pair:
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> f = np.arange(0.25, 120.0, 0.25)
+    >>> poles, _ = modal.exact_modes(np.eye(2), 0.5 * np.eye(2), K)
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, f, [0, 1], [0])
+    >>> fit = lsfd(h.values, f, poles)
+    >>> fit.residue.shape, fit.lower.shape, fit.power          # power 0: receptance
+    ((2, 2, 1), (2, 1), 0)
     """
 
     pole: np.ndarray          # (n_modes,) complex, rad/s

@@ -48,6 +48,16 @@ class RetainedPoint:
     snap_distance_m : float
         Distance (m) from a configured point ``xyz`` to the node retained for it (0 for
         node sets and node indices).
+
+    Examples
+    --------
+    Returned by :func:`resolve_retained_config`:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> resolve_retained_config(beam, ["tip"])[0]
+    RetainedPoint(name='tip', nodes=(20,), n_free_dofs=6, snap_distance_m=0.0)
     """
 
     name: str

@@ -206,6 +206,14 @@ class ReducedModes:
     n_massless : int
         Number of infinite eigenvalues (coordinates without inertia, e.g. shell drilling
         rotations); ``k + n_massless = n``.
+
+    Examples
+    --------
+    Returned by :func:`reduced_modes`:
+
+    >>> res = reduced_modes(np.array([[2e5, -1e5], [-1e5, 1e5]]), np.eye(2))
+    >>> res.vectors.shape, res.n_massless
+    ((2, 2), 0)
     """
 
     omega2: np.ndarray

@@ -32,6 +32,18 @@ class EffectiveMassTable:
     kind : str
         ``"fixed_base"`` (modes of the model with its supports) or
         ``"fixed_interface"`` (Craig-Bampton interior modes).
+
+    Examples
+    --------
+    Returned by :func:`effective_mass`; the effective masses add up to at most the moving
+    mass:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> t = effective_mass(beam, "uz", n_modes=6)
+    >>> t.direction, bool(t.effective_mass_kg.sum() <= t.total_mass_kg)
+    ('uz', True)
     """
 
     fn_hz: np.ndarray

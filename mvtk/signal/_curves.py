@@ -21,6 +21,15 @@ class AmplitudeCurves:
     """Amplitude (never power) curves on a common frequency axis.
 
     ``amplitude`` has shape (n_curves, n_freq): ``|H|`` of an FRF or ``sqrt(PSD)``.
+
+    Examples
+    --------
+    Returned by :func:`amplitude_curves`: one row of ``|H|`` per response/reference pair:
+
+    >>> from mvtk import testing
+    >>> c = amplitude_curves(testing.modal_frf(np.arange(0.0, 100.0, 0.125), 20.0, 0.01))
+    >>> c.amplitude.shape, c.labels
+    ((1, 800), ('response/force',))
     """
 
     f_hz: np.ndarray

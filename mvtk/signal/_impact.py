@@ -171,6 +171,17 @@ class SetQuality:
         ``clipped`` (channels with a flat top at the ADC range and their level,
         ``""`` if none), ``usable`` (False: the set is not in the FRF matrix) and
         ``verdict`` (``"ok"`` or what is wrong, in words).
+
+    Examples
+    --------
+    Returned by :func:`set_quality`; ``to_dataframe`` gives one row per set:
+
+    >>> from mvtk import testing
+    >>> from mvtk.modal import frf_matrix
+    >>> hits = testing.impact_test(20.0, 0.01, 256.0, 4.0, 3, np.random.default_rng(0))
+    >>> q = set_quality(frf_matrix([hits], "force"))
+    >>> len(q.rows), q.rows[0]["excitation"]
+    (1, 'impact')
     """
 
     rows: tuple
@@ -227,6 +238,18 @@ def set_quality(frf) -> SetQuality:
     mvtk.errors.FormatError
         The object carries no set-quality table (FRFs read from an FRF file, or made
         by another tool).
+
+    Examples
+    --------
+    Three hits of a simulated impact test: one set, all hits found, usable:
+
+    >>> from mvtk import testing
+    >>> from mvtk.modal import frf_matrix
+    >>> hits = testing.impact_test([20.0, 55.0], [0.01, 0.02], 256.0, 4.0, 3,
+    ...                            np.random.default_rng(0))
+    >>> table = set_quality(frf_matrix([hits], "force")).to_dataframe()
+    >>> table[["excitation", "n_hits", "usable"]].values.tolist()
+    [['impact', 3, True]]
     """
     attrs = dict(getattr(frf, "attrs", {}))
     if "frf" in getattr(frf, "data_vars", {}):
@@ -245,7 +268,18 @@ def set_quality(frf) -> SetQuality:
 @dataclass(frozen=True)
 class ImpactPolicy:
     """Record, pretrigger, exponential window and FFT length shared by every set of an
-    impact test (see :func:`impact_policy`)."""
+    impact test (see :func:`impact_policy`).
+
+    Examples
+    --------
+    Returned by :func:`impact_policy`; ``reason`` states the choices in words:
+
+    >>> from mvtk import testing
+    >>> hits = testing.impact_test(20.0, 0.01, 256.0, 4.0, 3, np.random.default_rng(0))
+    >>> pol = impact_policy([hits], "force")
+    >>> pol.nperseg, pol.reason.startswith("one policy")
+    (1021, True)
+    """
 
     nperseg: int
     pretrigger: int

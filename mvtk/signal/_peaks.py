@@ -33,6 +33,16 @@ class PeakResult:
         Line spacing in Hz.
     noise_db : float
         Estimated noise jitter of the summed curve in dB (see :func:`noise_jitter_db`).
+
+    Examples
+    --------
+    Returned by :func:`find_peaks`:
+
+    >>> from mvtk import testing
+    >>> res = find_peaks(testing.modal_frf(np.arange(0.0, 100.0, 0.125), [20.0, 55.0],
+    ...                                    [0.01, 0.02]))
+    >>> res.index.tolist(), bool((res.prominence_db > 6).all())
+    ([160, 440], True)
     """
 
     fn_hz: np.ndarray

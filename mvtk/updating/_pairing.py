@@ -143,6 +143,14 @@ class Pairing:
     method : tuple of str
         How each target was paired: ``"fixed"``, ``"mac"``, ``"frequency"`` or
         ``"order"``.
+
+    Examples
+    --------
+    Returned by :func:`pair_modes`:
+
+    >>> p = pair_modes([FrequencyTarget(18.0, mode=2)], np.array([18.5, 116.3]))
+    >>> p.modes, p.method
+    (array([1]), ('fixed',))
     """
 
     modes: np.ndarray

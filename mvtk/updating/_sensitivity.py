@@ -106,6 +106,21 @@ class Sensitivity:
         df/dp in Hz per parameter unit.
     normalised : ndarray, shape (n_modes, n_params)
         (p / f) df/dp: relative frequency change per relative parameter change.
+
+    Examples
+    --------
+    Returned by :func:`eigen_sensitivity`: ``d_fn_hz`` in Hz per parameter unit; for
+    ``f ~ sqrt(E)``, ``df/dE = f / (2 E)``:
+
+    >>> from mvtk.fe import build_model
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> s = eigen_sensitivity(beam, ["materials.steel.E"], builder=build_model, n_modes=1)
+    >>> round(float(s.d_fn_hz[0, 0] * 2 * 2.1e11 / s.fn_hz[0]), 4)
+    1.0
     """
 
     paths: tuple[str, ...]

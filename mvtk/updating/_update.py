@@ -69,6 +69,20 @@ class HistoryEntry:
     model : {"full", "reduced"}
         ``"reduced"``: Ritz values of the reduced-basis inner loop (see ``update``'s
         ``reduced_basis``), not eigenvalues of the full model.
+
+    Examples
+    --------
+    One entry per model evaluation in ``UpdateResult.history``:
+
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> res = update(beam, ["materials.steel.E"], [19.0], n_modes=2)
+    >>> first = res.history[0]
+    >>> first.evaluation, first.model, round(float(first.fn_hz[0]), 2)
+    (1, 'full', 18.57)
     """
 
     evaluation: int
