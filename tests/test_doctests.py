@@ -73,19 +73,10 @@ NO_EXAMPLE_YET = {
         "auto_segment",
     ),
     "mvtk.fe": (
-        "SparsityPattern", "Electrode", "ShellPiezoPatch", "PiezoCoupling",
-        "piezo_coupling", "modal_emcc", "select_region", "ImportedMesh", "ShellSection",
-        "BeamProperty", "load_vector", "read_op4", "Op4Matrix",
-    ),
-    "mvtk.correlation": (
-        "CorrelationResult", "read_test_shapes", "DofMapping", "ModePairing",
-        "ExpansionResult", "PlacementResult",
-    ),
-    "mvtk.reduction": (
-        "with_electrodes",
+        "read_op4", "Op4Matrix",
     ),
     "mvtk.control": (
-        "piezo_plant", "FeedbackLaw",
+        "FeedbackLaw",
     ),
     "mvtk.io": (
         "register_reader",

@@ -51,6 +51,23 @@ class ExpansionResult:
     method : str
     gcv : ndarray or None
         ``(lambda, GCV)`` grid searched (regularised method).
+
+    Examples
+    --------
+    Returned by :func:`expand_serep` and :func:`expand_lsq`:
+
+    >>> from mvtk.correlation import correlate, read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> fe = modal_analysis(beam, 2)
+    >>> res = correlate(geo, beam, fe)
+    >>> out = expand_serep(res.fe, beam, fe, res.mapping)
+    >>> out.method, out.coefficients.shape, out.smoothing
+    ('serep', (2, 2), 0.0)
     """
 
     shapes: xr.DataArray

@@ -126,6 +126,22 @@ class DofMapping:
         ``n_constrained`` (FE DOFs of the row that are constrained, read as zero).
     method : str
     tol : float
+
+    Examples
+    --------
+    Returned by :func:`map_sensors`; ``report`` says how each sensor was mapped (on a
+    beam model: to the nearest node):
+
+    >>> from mvtk.correlation import read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> mapping = map_sensors(geo, beam)
+    >>> mapping.report[["dof", "method"]].values.tolist()[0], mapping.n_fe_dof
+    (['1+z', 'nearest'], 72)
     """
 
     matrix: sp.csr_matrix

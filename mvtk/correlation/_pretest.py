@@ -111,6 +111,17 @@ class PlacementResult:
         Why the set has more DOFs than asked for (empty otherwise): effective
         independence stops where removing any further candidate (node) would leave the
         target modes linearly dependent at the sensors.
+
+    Examples
+    --------
+    Returned by the placement functions; ``geometry`` is the chosen sensor set:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> res = kinetic_energy_placement(beam, modal_analysis(beam, 2), candidate_geometry(beam), 2)
+    >>> res.method, res.geometry.dof_labels
+    ('kinetic energy', ['12+z', '13+z'])
     """
 
     geometry: TestGeometry

@@ -120,6 +120,24 @@ def read_test_shapes(path: str | Path, geometry) -> xr.DataArray:
     ------
     FormatError
         The file holds neither form.
+
+    Examples
+    --------
+    Shapes saved as a ``("mode", "dof")`` DataArray in netCDF, with sensor labels as ``dof``:
+
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> from mvtk.correlation import read_test_geometry
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "shapes.nc"
+    >>> xr.DataArray([[0.2, 0.6, 1.0]], dims=("mode", "dof"), name="shapes",
+    ...              coords={"mode": [1], "dof": ["1+z", "2+z", "3+z"],
+    ...                      "fn_hz": ("mode", [18.6])}).to_netcdf(path)
+    >>> s = read_test_shapes(path, geo)
+    >>> s.values.tolist(), s["fn_hz"].values.tolist()
+    ([[0.2, 0.6, 1.0]], [18.6])
     """
     import mvtk.io
 

@@ -57,6 +57,16 @@ class SparsityPattern:
     position : ndarray (n_el * n * n,)
         Index into the CSR data of each element-matrix entry (``nnz`` for entries on a
         constrained DOF, which are dropped).
+
+    Examples
+    --------
+    Returned by :func:`sparsity_pattern`; sums element matrices on a fixed pattern:
+
+    >>> pattern = sparsity_pattern(np.array([[0, 1], [1, 2]]), np.array([-1, 0, 1]), 2)
+    >>> Ke = np.tile(np.array([[1.0, -1.0], [-1.0, 1.0]]), (2, 1, 1))
+    >>> pattern.assemble(Ke).toarray()
+    array([[ 2., -1.],
+           [-1.,  1.]])
     """
 
     def __init__(self, dofs: np.ndarray, free_index: np.ndarray, n_free: int):

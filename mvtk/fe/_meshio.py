@@ -72,6 +72,15 @@ class ImportedMesh:
         Per set name, the indices into ``cells[kind]`` for each kind it holds.
     node_sets : dict of str to ndarray
     source : str
+
+    Examples
+    --------
+    Returned by :func:`read_mesh` and :func:`from_meshio`:
+
+    >>> import meshio
+    >>> mesh = from_meshio(meshio.Mesh(np.eye(3), [("triangle", np.array([[0, 1, 2]]))]))
+    >>> mesh.nodes.shape, list(mesh.cells)
+    ((3, 3), ['tri3'])
     """
 
     nodes: np.ndarray
@@ -247,7 +256,17 @@ def from_meshio(m: Any, source: str = "") -> ImportedMesh:
 
 @dataclass(frozen=True)
 class ShellSection:
-    """Section of a shell element set: laminate, material axis, offset (see ShellSet)."""
+    """Section of a shell element set: laminate, material axis, offset (see ShellSet).
+
+    Examples
+    --------
+    The section of a shell element set with its ply angles measured from global y:
+
+    >>> from mvtk.fe import IsotropicMaterial, Laminate, Ply
+    >>> lam = Laminate((Ply(IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0), 2e-3),))
+    >>> ShellSection(lam, material_axis=(0.0, 1.0, 0.0)).material_axis
+    (0.0, 1.0, 0.0)
+    """
 
     laminate: Laminate
     material_axis: tuple[float, float, float] = (1.0, 0.0, 0.0)
@@ -256,7 +275,18 @@ class ShellSection:
 
 @dataclass(frozen=True)
 class BeamProperty:
-    """Section of a beam element set: section, orientation vector, offset (see BeamSet)."""
+    """Section of a beam element set: section, orientation vector, offset (see BeamSet).
+
+    Examples
+    --------
+    A 20 x 2 mm steel strip whose width axis lies along global y:
+
+    >>> from mvtk.fe import IsotropicMaterial, rectangle_section
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> prop = BeamProperty(rectangle_section(steel, 0.02, 0.002), orientation=(0.0, 1.0, 0.0))
+    >>> round(prop.section.EIy, 6)
+    2.8
+    """
 
     section: BeamSection
     orientation: tuple[float, float, float] = (0.0, 0.0, 1.0)
