@@ -334,6 +334,21 @@ def auto_segment(n: int, fs: float, curves) -> tuple[int, str]:
     nperseg : int
     reason : str
         The choice and what limited it, in words.
+
+    Examples
+    --------
+    A 20 Hz mode at 1 % has a -3 dB band of ``2 zeta f`` = 0.4 Hz; 8 lines across it need
+    ``df <= 0.05 Hz``, i.e. at least 20 480 samples at 1024 Hz: the next power of two is
+    32 768 (here the exact receptance on the lines of each trial segment, 1024 s of data):
+
+    >>> from mvtk import testing
+    >>> fs, n = 1024.0, 2**20
+    >>> def curves(nperseg):
+    ...     f = np.fft.rfftfreq(nperseg, 1 / fs)
+    ...     return np.abs(testing.modal_frf(f, 20.0, 0.01).values[0]), None, 2 * n // nperseg - 1
+    >>> nperseg, reason = auto_segment(n, fs, curves)
+    >>> nperseg, reason.split(";")[0]
+    (32768, '63 average(s) of 32768 samples (df = 0.03125 Hz)')
     """
     from ._peaks import find_peaks
 
