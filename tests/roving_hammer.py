@@ -75,3 +75,70 @@ def write(folder, rng, *, double: int | None = 10, clipped: int | None = 20) -> 
             np.savetxt(fh, np.column_stack([t, force, acc]), fmt="%.9g", delimiter=",")
         paths.append(p)
     return paths
+
+
+def write_fe_test(folder, model, modes, points, sensor, *, zeta=0.01, fs=2048.0,
+                  record_s=2.0, f_max_hz=None, seed=0, stem="hit",
+                  direction="uz") -> list[Path]:
+    """A roving-hammer test of an FE model's modes, one CSV file per hammer point.
+
+    The specimen's modal model: the ``modes`` of ``model`` (mass-normalised shapes from
+    :func:`mvtk.fe.modal_analysis`) below ``f_max_hz``, all with damping ``zeta``. The
+    hammer hits the mesh nodes ``points`` (0-based node indices, test nodes 1..n in that
+    order) along the global ``direction`` (``"uz"``: test direction ``+z``), the
+    accelerometer stays at mesh node ``sensor``; the modal constant of mode r for hit j
+    is ``phi_r(j) phi_r(sensor)`` (reciprocity of the FE modes at the mesh nodes). One
+    hit per file (``mvtk.testing.impact_test``: exact linear convolution), 0.1 % noise
+    on both channels. Also writes ``geometry.csv`` (node, x, y, z of the hit nodes).
+    Returns the paths of the hit files.
+    """
+    from mvtk.fe import DOF_NAMES
+    from mvtk.testing import impact_test
+
+    folder = Path(folder)
+    fn = np.asarray(modes.fn_hz, dtype=float)
+    keep = fn < (f_max_hz if f_max_hz is not None else 0.45 * fs)
+    u = model.expand(modes.shapes)[:, DOF_NAMES.index(direction), :][:, keep]
+    d = "+" + direction[1]
+    s_node = 1 + list(points).index(sensor) if sensor in list(points) else len(points) + 1
+    (folder / "geometry.csv").write_text("node,x,y,z\n" + "".join(
+        f"{k + 1},{x:.12g},{y:.12g},{z:.12g}\n"
+        for k, (x, y, z) in enumerate(model.nodes[list(points)])), encoding="utf-8")
+    files = []
+    for k, p in enumerate(points):
+        c = u[p] * u[sensor]
+        c = np.where(np.abs(c) > 1e-9 * np.abs(c).max(), c, 0.0)
+        th = impact_test(fn[keep], zeta, fs, record_s, 1, np.random.default_rng(seed + k),
+                         modal_constants=c)
+        v = th.values.copy()
+        # noise on both channels: a noiseless sampled half-sine has an exact zero at the
+        # Nyquist line, where mvtk.modal.frf_matrix refuses the H1 ratio
+        v += 1e-3 * v.std(axis=1, keepdims=True) * np.random.default_rng(
+            10_000 + seed + k).standard_normal(v.shape)
+        path = folder / f"{stem}_{k + 1:02d}.csv"
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(f"# roving hammer at node {k + 1}, accelerometer at node {s_node}\n"
+                     f"# node: {k + 1}, {s_node}\n# direction: {d}, {d}\n"
+                     "# quantity: force, acceleration\ntime [s],hammer [N],accel [m/s^2]\n")
+            np.savetxt(fh, np.column_stack([th["time"].values, v[0], v[1]]), fmt="%.10g",
+                       delimiter=",")
+        files.append(path)
+    return files
+
+
+def write_decay(path, fn_hz, *, zeta=0.01, fs=2048.0, record_s=3.0, amplitude=5.0,
+                seed=0) -> Path:
+    """A free decay of one mode (``mvtk.testing.sdof_free_decay``, acceleration in
+    m/s^2) with 0.5 % of ``amplitude`` white noise, written as a CSV file."""
+    from mvtk.testing import sdof_free_decay
+
+    d = sdof_free_decay(float(fn_hz), zeta, fs, record_s, amplitude=amplitude,
+                        quantity="acceleration", units="m/s^2")
+    x = d.values[0] + 5e-3 * amplitude * np.random.default_rng(seed).standard_normal(
+        d.sizes["time"])
+    path = Path(path)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# free decay of one mode\n# quantity: acceleration\n"
+                 "time [s],accel [m/s^2]\n")
+        np.savetxt(fh, np.column_stack([d["time"].values, x]), fmt="%.10g", delimiter=",")
+    return path

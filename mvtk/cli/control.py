@@ -16,8 +16,8 @@ from ._commands import COMMANDS
 __all__ = ["add_parser", "plant_from_arrays"]
 
 _TEXT_COLUMNS = ("settling_time_s", "zeta_mode1", "fn_mode1_hz", "stable",
-                 "max_real_pole_1_per_s", "peak_voltage_V", "voltage_within_limit",
-                 "peak_reduction_db")
+                 "max_real_pole_1_per_s", "gain_margin_db", "critical_gain_factor",
+                 "peak_voltage_V", "voltage_within_limit", "peak_reduction_db")
 
 
 def add_parser(subparsers) -> None:
@@ -29,7 +29,8 @@ def add_parser(subparsers) -> None:
         help=COMMANDS["control"].help,
         description="Run the study's stages up to its [control] section (cached) and print "
         "per controller: settling time, closed-loop damping of mode 1, stability (largest "
-        "real part of the closed-loop poles), FFT peak reduction and actuator peak. Exit "
+        "real part of the closed-loop poles), gain margin and critical gain factor of a "
+        "single-actuator loop, FFT peak reduction and actuator peak. Exit "
         "status 1 when a closed loop is unstable.",
     )
     p.add_argument("study", help="study TOML file")

@@ -57,8 +57,10 @@ def add_parser(subparsers) -> None:
         "test, free decay, multi-point FRF set) and write DIR/study.toml with the channels, "
         "record lengths and resonances found, plus DIR/structure.toml (a placeholder) when "
         "no --structure is given. Hammer-test files whose channels carry node numbers and "
-        "differ in hammer or sensor node form a roving test ([modal] sets). The study is "
-        "validated before the command returns.")
+        "differ in hammer or sensor node form a roving test ([modal] sets), grouped by "
+        "folder (a node pair seen again starts another test); every further roving test "
+        "or multi-point FRF file becomes a measurement of kind multi-point, compared with "
+        "[modal]. The study is validated before the command returns.")
     p.add_argument("folder", help="folder to write study.toml (and structure.toml) into")
     p.add_argument("--structure", default=None, metavar="FILE",
                    help="your structure TOML (referenced), or a mesh file (Gmsh .msh, Abaqus "

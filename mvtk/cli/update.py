@@ -12,6 +12,7 @@ works as is) and the update runs as the ``updating`` stage of the cached study p
     targets_hz = [13.26, 41.14]              # ascending; or: targets = [{fn_hz = ...}]
     max_iter = 30                            # optional
     # n_modes, regularization, mac_weight, frequency_std: optional solver settings
+    # model_form_std = 0.005                 # relative std of the model-form term
     # builder = "package.module:function"    # optional, default mvtk.fe.build_model
 
     [[updating.parameters]]
@@ -52,6 +53,7 @@ def _format_tables(summary: dict) -> str:
         parts = [
             f"converged: {summary['success']} ({summary['message']}); evaluations "
             f"{summary['n_evaluations']}, identifiable: {summary['identifiable']}",
+            _weighting_line(summary),
             "", "Residuals", table(summary["residuals"], "target"),
             "", "Parameters", table(summary["parameters"], "parameter"),
             "", "Unpaired model modes", table(summary["unpaired_modes"], "mode"),
@@ -59,6 +61,19 @@ def _format_tables(summary: dict) -> str:
     if summary.get("swaps"):
         parts += ["", f"Mode-pairing swaps: {list(summary['swaps'])}"]
     return "\n".join(parts)
+
+
+def _weighting_line(summary: dict) -> str:
+    """How the targets were weighted and what the parameter std stands on."""
+    if summary.get("weighting") != "statistical":
+        return (f"targets weighted by their weights; parameter std: "
+                f"{summary.get('covariance_scaling') or 'none'}")
+    mf = summary.get("model_form_std")
+    vf = summary.get("variance_factor")
+    return (f"targets weighted by 1/std^2 (identification std and a model-form term of "
+            f"{100 * (mf or 0):.3g} % of fn); parameter std: "
+            f"{summary.get('covariance_scaling')}; variance factor chi^2/(m-n) = "
+            + ("n/a" if vf is None else f"{vf:.3g}"))
 
 
 def run_update(args: argparse.Namespace) -> int:

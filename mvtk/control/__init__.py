@@ -8,7 +8,7 @@ to a plant output (sensor) and input (actuator) by name:
 - :class:`PPF` and :class:`SRF` (one or several second-order filters
   ``(f_hz, zeta_f, gain)``; gains normalised by the plant's static gain from actuator to
   sensor so that ``gain`` is the dimensionless G of the single-mode forms of PHYSICS.md
-  section 4), :class:`VelocityFeedback`, :class:`LQR` (full state),
+  section 4), :class:`VelocityFeedback`, :class:`LQR` (full state, one or several actuators),
 - :class:`LyapunovBangBang` (``u = -u_max sat(B'q'/eps)`` or ``-u_max sat(B'Px/eps)``).
 
 Any of them may have an actuator limit ``u_max``. :func:`closed_loop` gives the linear

@@ -90,7 +90,10 @@ class FeedbackLaw:
     layer : str
         ``"sat"`` or ``"tanh"`` smoothing of the switch.
     actuator : int
-        Index of the actuated plant input.
+        Index of the actuated plant input (the first one of ``actuators``).
+    actuators : tuple of int
+        Indices of all actuated plant inputs of a multi-input law (``Bu`` and ``S``
+        have one column / row per entry); empty for a single-input law.
     states, units : tuple of str
         Names of the controller states.
 
@@ -125,10 +128,16 @@ class FeedbackLaw:
     meta: dict = field(default_factory=dict)
     A_loop: np.ndarray | None = None
     B_loop: np.ndarray | None = None
+    actuators: tuple[int, ...] = ()
 
     @property
     def is_linear(self) -> bool:
         return self.kind == "linear"
+
+    @property
+    def actuator_indices(self) -> tuple[int, ...]:
+        """Plant inputs the law drives, in the order of the rows of ``S``."""
+        return tuple(self.actuators) if self.actuators else (int(self.actuator),)
 
     def slope(self) -> float:
         """``du/ds`` at ``s = 0``: 1 for linear and saturated laws, ``-u_max/eps`` for the
@@ -507,8 +516,9 @@ class LQR:
     ``actuator`` may name several plant inputs (e.g. the voltages of several piezo
     patches): :meth:`gain_matrix` then solves the multi-input Riccati equation with
     ``R`` times the identity and :meth:`closed_loop_poles` gives the poles of
-    ``A - B K``; connecting it to a plant for simulation (:meth:`realize`) takes one
-    actuator.
+    ``A - B K``; :meth:`realize` connects all of them (one command per actuator, each
+    clipped to ``u_max``), so :func:`~mvtk.control.simulate` and
+    :func:`~mvtk.control.closed_loop` run the multi-input loop.
 
     Examples
     --------
@@ -572,12 +582,12 @@ class LQR:
     def realize(self, plant, design_plant=None) -> FeedbackLaw:
         """Connect to ``plant`` (gain computed on ``design_plant`` if given, same states)."""
         ss = plant_state_space(plant)
-        if not (self.actuator is None or isinstance(self.actuator, str)):
-            if len(self.actuator) != 1:
-                raise ParameterError(
-                    f"LQR with {len(self.actuator)} actuators: the feedback law of a "
-                    "simulation drives one input; use gain_matrix / closed_loop_poles")
-        act = self._inputs(ss)[0]
+        acts = self._inputs(ss)
+        if design_plant is not None:
+            dss = plant_state_space(design_plant)
+            if [dss.inputs[i] for i in self._inputs(dss)] != [ss.inputs[i] for i in acts]:
+                raise ParameterError("LQR: the design plant must have the actuators "
+                                     f"{[ss.inputs[i] for i in acts]} of the plant")
         Kg = self.gain_matrix(design_plant if design_plant is not None else plant)
         if Kg.shape[1] != ss.n_states:
             raise DimensionError(
@@ -585,10 +595,18 @@ class LQR:
                 f"{ss.n_states} states"
             )
         n = ss.n_states
-        ctrl = _Ctrl(np.zeros((0, 0)), np.zeros((0, n)), np.zeros((1, 0)), -Kg)
         meta = {"controller": "LQR", "gain": Kg}
-        meas = (np.eye(n), np.zeros((n, 1)), np.zeros((n, 1)))
-        return _linear_law(ss, act, meas, ctrl, self.u_max, repr(self), meta)
+        if len(acts) == 1:
+            ctrl = _Ctrl(np.zeros((0, 0)), np.zeros((0, n)), np.zeros((1, 0)), -Kg)
+            meas = (np.eye(n), np.zeros((n, 1)), np.zeros((n, 1)))
+            return _linear_law(ss, acts[0], meas, ctrl, self.u_max, repr(self), meta)
+        # full-state feedback on every actuator: u = -K x (the state is the measurement)
+        Bu = ss.B[:, acts]
+        return FeedbackLaw(
+            A=ss.A.copy(), Bu=Bu, Nz=np.zeros((n, n)), S=-Kg, Sz=-Kg.copy(),
+            kind="linear" if self.u_max is None else "saturated", n_plant=n,
+            actuator=acts[0], u_max=self.u_max, description=repr(self), meta=meta,
+            A_loop=ss.A.copy(), B_loop=Bu, actuators=tuple(acts))
 
 
 @dataclass(frozen=True)

@@ -82,19 +82,20 @@ def closed_loop(plant, controller, design_plant=None) -> StateSpace:
     n = ss.n_states
     N = law.A.shape[0]
     A = law.closed_loop_matrix()
+    acts = list(law.actuator_indices)
+    k = len(acts)
     B = np.zeros((N, ss.n_inputs))
     B[:n] = ss.B
-    C = np.zeros((ss.n_outputs + 1, N))
+    C = np.zeros((ss.n_outputs + k, N))
     C[: ss.n_outputs, :n] = ss.C
-    C[: ss.n_outputs] += ss.D[:, [law.actuator]] @ law.S
-    C[-1] = law.S[0]
-    D = np.vstack([ss.D, np.zeros((1, ss.n_inputs))])
-    D[-1, law.actuator] = 0.0
-    act = ss.inputs[law.actuator]
+    C[: ss.n_outputs] += ss.D[:, acts] @ law.S
+    C[ss.n_outputs:] = law.S
+    D = np.vstack([ss.D, np.zeros((k, ss.n_inputs))])
     return StateSpace(
-        A, B, C, D, inputs=ss.inputs, outputs=[*ss.outputs, f"u({act})"],
+        A, B, C, D, inputs=ss.inputs,
+        outputs=[*ss.outputs, *(f"u({ss.inputs[a]})" for a in acts)],
         states=[*ss.states, *law.controller_states], input_units=ss.input_units,
-        output_units=[*ss.output_units, ss.input_units[law.actuator]],
+        output_units=[*ss.output_units, *(ss.input_units[a] for a in acts)],
         meta={"controller": law.description, **law.meta},
     )
 
@@ -501,7 +502,8 @@ def simulate(
         between control samples while the plant is advanced exactly (fast; for the
         switching law the in-layer loop is checked for sampled stability). Integrator
         names: :func:`scipy.integrate.solve_ivp` on the continuous law. ``auto``: ``zoh``
-        for linear loops, ``sampled`` otherwise.
+        for linear loops, ``sampled`` otherwise (``LSODA`` for a saturated multi-input
+        law).
     control_rate_hz : float, optional
         Rate of the ``sampled`` controller, rounded up to an integer multiple of
         ``fs_out``; default ``max(fs_out, 10 kHz)``.
@@ -515,9 +517,10 @@ def simulate(
     Returns
     -------
     xarray.Dataset
-        ``outputs`` (output, time), ``inputs`` (input, time: the actuator command, zero
-        for the open loop), ``states`` (state, time), ``disturbance`` (time) when given;
-        ``units`` coordinates; attrs ``controller``, ``fs_out``, ``method``.
+        ``outputs`` (output, time), ``inputs`` (input, time: the command of each
+        actuator the law drives, zero for the open loop), ``states`` (state, time),
+        ``disturbance`` (time) when given; ``units`` coordinates; attrs ``controller``,
+        ``fs_out``, ``method``.
 
     Examples
     --------
@@ -553,7 +556,7 @@ def simulate(
         cstates: tuple[str, ...] = ()
     else:
         A, Bu, S, Nz, Sz = law.A, law.Bu, law.S, law.Nz, law.Sz
-        N, act, cstates = A.shape[0], law.actuator, law.controller_states
+        N, act, cstates = A.shape[0], list(law.actuator_indices), law.controller_states
     X0 = np.zeros(N)
     if initial is not None:
         x0 = np.asarray(initial, dtype=float).ravel()
@@ -601,7 +604,7 @@ def simulate(
 
     linear = law is None or law.is_linear
     if method == "auto":
-        method = "zoh" if linear else "sampled"
+        method = "zoh" if linear else ("sampled" if S.shape[0] == 1 else "LSODA")
     if method == "zoh":
         if not linear:
             raise ParameterError(
@@ -615,7 +618,9 @@ def simulate(
         U = X @ S.T if E is None else X @ S.T + E @ Su.T
     elif method == "sampled":
         if law is None or law.S.shape[0] != 1:
-            raise ParameterError("method='sampled' needs a single-actuator controller")
+            raise ParameterError("method='sampled' needs a single-actuator controller; "
+                                 "a multi-input law runs with 'zoh' (linear) or an "
+                                 "integrator ('LSODA', 'Radau', 'BDF')")
         rate = max(fs_out, 1e4) if control_rate_hz is None else float(control_rate_hz)
         if not (np.isfinite(rate) and rate > 0):
             raise ParameterError(f"control_rate_hz must be > 0, got {control_rate_hz}")
@@ -641,9 +646,9 @@ def simulate(
         U = np.zeros((n_t, 1))
     Y = X[:, :n] @ ss.C.T
     if act is not None:
-        Y = Y + U @ ss.D[:, [act]].T
-    act_name = ss.inputs[act] if act is not None else ss.inputs[0]
-    act_unit = ss.input_units[act if act is not None else 0]
+        Y = Y + U @ ss.D[:, act].T
+    act_names = [ss.inputs[a] for a in act] if act is not None else [ss.inputs[0]]
+    act_units = [ss.input_units[a] for a in act] if act is not None else [ss.input_units[0]]
     data = {
         "outputs": (("output", "time"), Y.T),
         "inputs": (("input", "time"), U.T),
@@ -657,8 +662,8 @@ def simulate(
             "time": ("time", t, {"units": "s"}),
             "output": list(ss.outputs),
             "output_units": ("output", list(ss.output_units)),
-            "input": [act_name],
-            "input_units": ("input", [act_unit]),
+            "input": act_names,
+            "input_units": ("input", act_units),
             "state": [*ss.states, *cstates],
         },
         attrs={

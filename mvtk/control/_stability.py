@@ -17,7 +17,8 @@ worst pole's.
 
 Margins are those of the loop transfer function broken at the actuator input,
 ``L(s) = c (sI - A)^-1 b`` (negative feedback, characteristic equation ``1 + L = 0``).
-Every mvtk law drives one actuator, so ``L`` is SISO even for full-state LQR. Definitions
+For a law driving one actuator ``L`` is SISO, also for full-state LQR; a multi-input
+LQR has no single loop and :func:`loop_margins` refuses it. Definitions
 (those of :func:`control.stability_margins`): phase crossovers are the frequencies
 ``w >= 0`` where ``L(jw)`` is real and negative, each with the gain margin
 ``1 / |L(jw)|``; the reported gain margin is the one closest to 1 (0 dB). Gain
@@ -472,6 +473,11 @@ def loop_margins(plant, controller, design_plant=None, *,
     (inf, 108.6)
     """
     law = _law(controller, plant, design_plant)
+    if len(law.actuator_indices) > 1:
+        raise ParameterError(
+            f"loop_margins: the law drives {len(law.actuator_indices)} inputs; gain and "
+            "phase margins are those of a loop broken at one input (use "
+            "closed_loop_stability for the multi-input loop)")
     A, b, c = law.loop()
 
     def stable_at(k: float) -> bool:

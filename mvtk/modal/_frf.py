@@ -449,7 +449,8 @@ def frf_matrix(
         strongly each line was excited; :func:`identify` marks modes it missed) and
         ``attrs`` ``estimator``, ``n_averages`` (sum over sets), ``n_sets``,
         ``exponential_window_tau_s`` (s, the window every set shares, when one was
-        applied: its damping ``1/(tau omega_n)`` is in every pole), ``window_policy``
+        applied: its damping ``1/(tau omega_n)`` is in every pole), ``nperseg`` and
+        ``nfft`` (samples, when every set shares them), ``window_policy``
         (impact) and ``set_quality``: the per-set quality table (double hits, clipped
         channels, coherence, excitation level; :func:`mvtk.signal.set_quality` reads it
         as a :class:`mvtk.signal.SetQuality`). A ``pair_quality`` coordinate
@@ -631,6 +632,12 @@ def frf_matrix(
                      df_hz=float(f0[1] - f0[0]), set_quality=quality.to_json())
     if policy is not None:
         out.attrs["window_policy"] = policy.reason
+    # record and FFT length (samples) when every set shares them: identify needs them
+    # to tell interpolated (zero-padded) lines from the record's own
+    for key in ("nperseg", "nfft"):
+        vals = {int(p[2][key]) for p in parts if key in p[2]}
+        if len(vals) == 1 and all(key in p[2] for p in parts):
+            out.attrs[key] = vals.pop()
     taus = {float(p[2]["exponential_window_tau_s"]) for p in parts
             if "exponential_window_tau_s" in p[2]}
     if len(taus) == 1 and len(parts) == sum("exponential_window_tau_s" in p[2]

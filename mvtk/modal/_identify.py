@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import xarray as xr
 
-from ._lsfd import lsfd_with_misfit, synthesise
+from ._lsfd import local_misfit, lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
 from ._refine import pole_std, refine_poles
@@ -196,6 +196,19 @@ shaker's force dips at resonances (drop-out: the view_0 sweep has its catalogued
 350 Hz mode at -37 dB) and only falls below -50 dB outside the swept band."""
 
 
+MAX_WINDOW_FRACTION = 0.9
+"""A mode is not reliable when the exponential window's damping ``1 / (tau wn)`` exceeds
+this fraction of its identified (windowed) damping: removing it multiplies any relative
+error of the windowed pole by ``1 / (1 - fraction)`` (10 at 0.9)."""
+
+MAX_TRUNCATION = 0.01
+"""On zero-padded (interpolated) lines of an exponentially windowed record, a mode whose
+windowed decay ``exp(-sigma_w T)`` is still above this fraction of its amplitude at the
+end of the record ``T`` is not reliable: its truncation adds ``exp(-i w T) / (i w -
+lambda)``, a ripple of period ``1 / T``, that no modal model holds (on the record's own
+lines ``k / T`` it only scales the residue)."""
+
+
 def excitation_level(h, fn_hz) -> np.ndarray:
     """Level of the excitation at each frequency in dB re its maximum in the band.
 
@@ -229,11 +242,20 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
                   contribution=None, min_contribution=0.1, local=None, min_local=0.8,
                   support=None, min_support=MIN_SUPPORT, half_hz=None,
                   excitation_db=None, min_excitation_db=None, excitation_name="force",
-                  kurtosis=None, max_harmonic_kurtosis=None, zeta_fit=None):
+                  kurtosis=None, max_harmonic_kurtosis=None, zeta_fit=None,
+                  clean_support=None, flagged="", zeta_window=None,
+                  max_window_fraction=MAX_WINDOW_FRACTION, truncation=None,
+                  max_truncation=MAX_TRUNCATION):
     """``reliable`` and ``reason`` per mode from the stated criteria.
 
     ``zeta_fit``: damping of the fitted FRFs (before an exponential window's damping
-    was removed) for the resolution check; default ``zeta``."""
+    was removed) for the resolution check; default ``zeta``. ``clean_support``: the
+    support on the FRFs of sets without a quality verdict (``flagged`` says which
+    are not), below ``min_support`` the mode is the flagged sets' alone.
+    ``zeta_window``: the window's damping ``1 / (tau wn)``, above
+    ``max_window_fraction`` of ``zeta_fit`` the mode is not reliable.
+    ``truncation``: the windowed mode's amplitude left at the end of a zero-padded
+    record, above ``max_truncation`` not reliable (see :data:`MAX_TRUNCATION`)."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
     kurtosis = nan if kurtosis is None else kurtosis
@@ -243,10 +265,27 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     half_hz = nan if half_hz is None else half_hz
     excitation_db = nan if excitation_db is None else excitation_db
     zeta_fit = zeta if zeta_fit is None else zeta_fit
-    for f, z, m, c, q, loc, sup, hw, ex, ku, zf in zip(fn, zeta, mpc_v, count, contribution,
-                                                       local, support, half_hz,
-                                                       excitation_db, kurtosis, zeta_fit):
+    clean_support = nan if clean_support is None else clean_support
+    zeta_window = nan if zeta_window is None else zeta_window
+    truncation = nan if truncation is None else truncation
+    for f, z, m, c, q, loc, sup, hw, ex, ku, zf, cs, zw, tr in zip(
+            fn, zeta, mpc_v, count, contribution, local, support, half_hz, excitation_db,
+            kurtosis, zeta_fit, clean_support, zeta_window, truncation):
         why = []
+        if np.isfinite(zw) and zf > 0 and zw > max_window_fraction * zf:
+            why.append(f"window damping is {zw / zf:.0%} of the identified damping "
+                       f"(> {max_window_fraction:.0%}): removing it multiplies any error "
+                       f"of the windowed pole by {zf / max(zf - zw, 1e-300):.3g}")
+        if np.isfinite(tr) and tr > max_truncation:
+            why.append(f"zero-padded lines of a windowed record that ends with this mode at "
+                       f"{tr:.1%} of its amplitude (> {max_truncation:.0%}): the truncation "
+                       "ripple biases its damping (use the record's own lines, nfft = "
+                       "nperseg)")
+        if (np.isfinite(cs) and cs < min_support and not (np.isfinite(sup)
+                                                           and sup < min_support)):
+            why.append(f"needed only by FRFs of flagged sets: LSFD misfit within "
+                       f"+-{hw:.3g} Hz without/with the mode {cs:.2f} on the clean FRFs "
+                       f"(< {min_support:g}; {flagged})")
         if max_harmonic_kurtosis is not None and np.isfinite(ku) and ku < max_harmonic_kurtosis:
             why.append(f"harmonic: kurtosis of the band-passed response {ku:.2f} "
                        f"(< {max_harmonic_kurtosis:g}; a sinusoid gives 1.5, a mode's random "
@@ -337,15 +376,22 @@ def identify(
         force hardly excited: ``excitation_db``, the reference autospectrum at ``fn`` re
         its maximum in the band, below ``WEAK_EXCITATION_DB`` of the excitation type,
         -35 dB impact, -50 dB sweep/random; NaN without a ``reference_level_db``
-        coordinate, e.g. UFF 58 FRFs), complex
+        coordinate, e.g. UFF 58 FRFs), a mode only the FRFs of flagged sets need
+        (``support`` < 2 on the FRFs whose ``pair_quality`` is empty: a clipped force,
+        a cut double hit), an exponential window's damping above ``MAX_WINDOW_FRACTION``
+        (90 %) of the identified one, a windowed mode still above ``MAX_TRUNCATION``
+        (1 %) of its amplitude at the end of a zero-padded record), complex
         and real shapes at the response DOFs from the residues of all references
         (mass-normalised when driving points exist), synthesised FRFs and their
         correlation with the measured ones; ``fn_std_hz``, ``zeta_std`` and
         ``shape_std``: first-order standard deviations from the FRF noise (the fit
-        residual of each FRF). When the FRFs carry ``attrs["exponential_window_tau_s"]``
-        (or ``exp_window_tau_s``) the damping the window added, ``1 / (tau w_n)``, is
-        removed from every pole (:func:`mvtk.signal.exponential_window_correction`) and
-        stated in the ``zeta_window`` column and ``window_tau_s``.
+        residual of each FRF; on zero-padded lines, ``attrs["nfft"] > attrs["nperseg"]``,
+        the variances are multiplied by ``nfft / nperseg``: the lines interpolate
+        ``nperseg / 2`` independent ones). When the FRFs carry
+        ``attrs["exponential_window_tau_s"]`` (or ``exp_window_tau_s``) the damping the
+        window added, ``1 / (tau w_n)``, is removed from every pole
+        (:func:`mvtk.signal.exponential_window_correction`) and stated in the
+        ``zeta_window`` column and ``window_tau_s``.
 
     Raises
     ------
@@ -418,9 +464,23 @@ def window_tau(h) -> float | None:
     return None
 
 
-WINDOW_DOMINATED = 0.5
-"""A pole keeps its pLSCF estimate (no refinement) when the exponential window's added
-damping ``1 / (tau wn)`` exceeds this fraction of its windowed damping ratio."""
+def record_lines(h) -> tuple[float | None, float]:
+    """Record length (s) behind the FRFs and how many lines per record line they hold.
+
+    From ``attrs["nperseg"]`` and ``attrs["nfft"]`` (samples; :func:`mvtk.signal.frf`
+    and :func:`frf_matrix` state them) with the line spacing: ``(nperseg / fs,
+    nfft / nperseg)``; ``(None, 1.0)`` when the FRFs do not say. A factor above 1 means
+    zero-padded, interpolated lines: neighbouring lines are not independent.
+    """
+    n, nfft = h.attrs.get("nperseg"), h.attrs.get("nfft")
+    f = h["frequency"].values
+    if n is None or nfft is None or f.size < 2:
+        return None, 1.0
+    n, nfft = int(n), int(nfft)
+    if n <= 0 or nfft < n:
+        return None, 1.0
+    fs = float(np.median(np.diff(f))) * nfft
+    return n / fs, nfft / n
 
 
 def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True,
@@ -443,17 +503,11 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
                            max_nfev=50 if refine else 0)
         if refine:
             pole, refined = ref.pole.copy(), ref.refined.copy()
-            tau_w = window_tau(h)
-            if tau_w is not None:
-                # where an exponential window adds most of a pole's damping, removing it
-                # multiplies any error of the windowed pole (x5 for 85 %): the refined
-                # continuous-time pole moved a roving-hammer test's mode-1 damping by
-                # +34 % against the truth where pLSCF's discrete-time pole was +6 %
-                z_pole = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1.0)
-                added = 1.0 / (tau_w * np.maximum(np.abs(pole), np.finfo(float).tiny))
-                keep = refined & (added > WINDOW_DOMINATED * z_pole)
-                pole[keep], refined[keep] = sel.pole[keep], False
         cov, noise = ref.covariance, ref.noise_std
+    # zero-padded lines interpolate the record's nperseg / 2 independent ones: the fit
+    # counts each piece of information ``pad`` times (variances ``pad`` times too small)
+    record_s, pad = record_lines(h)
+    cov = cov * pad
     fn = np.abs(pole) / (2 * np.pi)
     zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
     windows, half = _windows(f, fn, zeta)
@@ -463,6 +517,8 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     # support: misfit without / with the mode within its window
     with np.errstate(divide="ignore", invalid="ignore"):
         support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
+    clean_support, flagged = _clean_support(h, Hf, f, pole, kind,
+                                            [w & finite for w in windows], residuals)
     no = h.sizes["response"]
     phi, part, scaled = rank_one_shapes(fit.residue, pole, _driving_points(h))
     if scaled:
@@ -478,16 +534,20 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         rot, real = _rotate_real(cplx)
         real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
         norm = "unit_max"
-    psi_std = _shape_std(coef_var, part, noise, no)
+    psi_std = _shape_std(coef_var, part, noise, no) * np.sqrt(pad)
     with np.errstate(divide="ignore", invalid="ignore"):
         gain = np.linalg.norm(cplx, axis=1) / np.linalg.norm(phi, axis=1) if nm else 1.0
     # the window's damping leaves every pole: sigma_true = sigma_id - 1 / tau
     fn_fit, zeta_fit = fn, zeta
     tau = window_tau(h)
     zeta_window = np.full(nm, np.nan)
+    truncation = np.full(nm, np.nan)
     if tau is not None and nm:
         fn, zeta = exponential_window_correction(fn_fit, zeta_fit, tau)
         zeta_window = zeta_fit - zeta
+        if record_s is not None and pad > 1.0:
+            # what is left of each windowed mode at the end of its record
+            truncation = np.exp(-np.clip(-pole.real, 0, None) * record_s)
     fn_std, zeta_std = pole_std(2 * np.pi * fn * (-zeta + 1j * np.sqrt(
         np.clip(1 - zeta**2, 0, None))), cov) if nm else (np.zeros(0), np.zeros(0))
     labels = dof_labels(h["node"].values, h["direction"].values, h["response"].values)
@@ -533,7 +593,9 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
                                      excitation_db=exc_db,
                                      min_excitation_db=WEAK_EXCITATION_DB.get(kind),
                                      excitation_name="force" if rq == {"force"}
-                                     else "excitation")
+                                     else "excitation",
+                                     clean_support=clean_support, flagged=flagged,
+                                     zeta_window=zeta_window, truncation=truncation)
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta,
         pole=2 * np.pi * fn * (-zeta + 1j * np.sqrt(np.clip(1 - zeta**2, 0, None))),
@@ -545,6 +607,36 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         support=support, excitation_db=exc_db, fn_std_hz=fn_std, zeta_std=zeta_std,
         shape_std=shp_std, refined=refined, zeta_window=zeta_window, window_tau_s=tau,
     )
+
+
+def _clean_support(h, H, f, pole, kind, windows, residuals):
+    """``support`` on the FRFs whose measurement sets passed the quality checks.
+
+    The ``pair_quality`` coordinate (:func:`frf_matrix`) names, per pair, the verdicts of
+    the sets behind it that are not ``"ok"`` (a clipped force, a cut double hit). A pole
+    that only such FRFs need (the spectrum of a clipped force has its zeros elsewhere
+    than the true one's: ``H F_true / F_clipped`` gets a pole at a zero of
+    ``F_clipped``) is fitted to the fault, not to the structure. LSFD fits every FRF
+    with its own residues on the shared basis, so the misfit of the clean FRFs alone is
+    that of a fit to them alone. Returns ``(support, text)``: NaN and ``""`` when no
+    pair is flagged or every pair is.
+    """
+    nm = pole.size
+    out = np.full(nm, np.nan)
+    pq = h.coords.get("pair_quality")
+    if pq is None or nm == 0:
+        return out, ""
+    verdict = np.asarray(pq.transpose("response", "reference").values).astype(str)
+    bad = verdict != ""
+    if not bad.any() or bad.all():
+        return out, ""
+    clean = H[~bad][:, None, :]
+    r_with, r_without, _ = local_misfit(clean, f, pole, kind, windows, residuals=residuals)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
+    names = sorted({v for v in verdict[bad]})
+    return out, (f"{int(bad.sum())} of {bad.size} FRFs from flagged sets: "
+                 + "; ".join(names))
 
 
 def _shape_std(coef_var, part, noise, no):

@@ -293,6 +293,12 @@ class _View(Mapping):
         self._tracker.record("full", self._path)
         return iter(self._data)
 
+    def names(self) -> list:
+        """The key names of the table, recorded as names only (iterating records the whole
+        subtree: a path written otherwise would then change the stage's key)."""
+        self._tracker.record("keys", self._path)
+        return list(self._data)
+
     def __len__(self) -> int:
         self._tracker.record("full", self._path)
         return len(self._data)

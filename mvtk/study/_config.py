@@ -11,8 +11,9 @@ module adds the cross-key rules and resolves the files. Overview (see
     [measurements.broadband]  same keys as impact: a short broadband impact test for the
                        higher modes (its modes are listed in damping.broadband_fn_hz)
     [measurements.decay]   file, channel, band_hz, fn_hz
-    [measurements.<any name>]  kind = "impact" | "decay" and the keys of that kind: any
-                       number of hammer records and decays, each with its own options
+    [measurements.<any name>]  kind = "impact" | "decay" | "multi-point" and the keys of
+                       that kind: any number of hammer records, decays and further
+                       multi-point tests (compared with [modal]), each with its own options
     [damping]          fn_hz, broadband_fn_hz, half_power_method, chowdhury_target_mass,
                        model_damping
     [fe]               n_modes
@@ -62,6 +63,12 @@ UNCERTAINTY_DISTRIBUTIONS = SCHEMA["uncertainty"].keys["distribution"].choices
 CONTROLLER_TYPES = tuple(CONTROLLER_SCHEMAS)
 
 
+def multipoint_file(test: str, what: str) -> str:
+    """Key in :attr:`Study.extra_files` of a file of the multi-point measurement ``test``
+    (``what``: ``"file"``, ``"set_<k>"`` (1-based) or ``"geometry"``)."""
+    return f"multipoint[{test}].{what}"
+
+
 def _file(root: Path, rel: str, where: str, key: str = "file") -> Path:
     p = (root / rel).resolve()
     if not p.is_file():
@@ -83,7 +90,10 @@ class Study:
     structure_file : Path or None
         The structure TOML (None when the structure is written inline in the study).
     measurement_files : dict of str to Path
-        ``"impact"`` / ``"broadband"`` / ``"decay"`` when configured.
+        The file of each impact and decay test, by name (``"impact"``, ``"decay"``, ...).
+        The files of a multi-point test are in ``extra_files`` (``modal_file``,
+        ``modal_set_<k>``, ``modal_geometry`` of ``[modal]``; :func:`multipoint_file`
+        names those of a multi-point measurement).
     structure : dict
         The structure description (parsed structure TOML or the inline tables).
     """
@@ -187,10 +197,31 @@ def load_study(path: str | Path) -> Study:
 
     files: dict[str, Path] = {}
     meas = cfg.get("measurements", {})
-    for key, m in meas.items():
-        files[key] = _file(root, m["file"], f"measurements.{key}")
-
     extra: dict[str, Path] = {}
+    for key, m in meas.items():
+        if m.get("kind") != "multi-point":
+            files[key] = _file(root, m["file"], f"measurements.{key}")
+            continue
+        # a further multi-point test: its files are inputs of the modal stage
+        where = f"measurements.{key}"
+        if "modal" not in cfg:
+            raise ConfigError(f"{where}: a multi-point measurement needs a [modal] section "
+                              "(the multi-point test whose shapes pair the updating targets; "
+                              "the others are compared with it)")
+        if m.get("file") is not None:
+            extra[multipoint_file(key, "file")] = _file(root, m["file"], where)
+        else:
+            for k, name in enumerate(m["sets"]):
+                extra[multipoint_file(key, f"set_{k + 1}")] = _file(root, name, where,
+                                                                    f"sets[{k}]")
+        if m.get("geometry") is not None:
+            extra[multipoint_file(key, "geometry")] = _file(root, m["geometry"],
+                                                            f"{where}.geometry")
+        lo = m["fmin_hz"] if m.get("fmin_hz") is not None else cfg["modal"]["fmin_hz"]
+        hi = m["fmax_hz"] if m.get("fmax_hz") is not None else cfg["modal"]["fmax_hz"]
+        if hi <= lo:
+            raise ConfigError(f"{where}: expected fmin_hz < fmax_hz, got {lo} and {hi} Hz")
+
     if "modal" in cfg:
         mo = cfg["modal"]
         if mo.get("file") is not None:

@@ -86,8 +86,9 @@ class InitResult:
     pairing : list of dict
         Each measured resonance (``fn_hz``) with the FE mode it was paired with by
         frequency (``fe_mode``, 1-based among the elastic modes, ``fe_fn_hz``,
-        ``df_pct``; with a generated mesh also ``fe_fn_refined_hz`` and
-        ``refined_change_pct`` on a mesh refined twice); empty when the structure was not
+        ``df_pct``; also ``fe_fn_refined_hz`` and ``refined_change_pct`` on a refined
+        mesh: a generated mesh refined twice in each direction, an imported one with
+        every element split into four); empty when the structure was not
         solved (placeholder, mesh to edit, or a multi-point test whose shapes pair the
         modes when the study runs).
     mesh_hint : list of str
@@ -221,17 +222,44 @@ def _classify_dataset(path: Path, ds) -> dict:
     return {"file": path, "kind": "skipped", "why": "only force channels"}
 
 
-def _roving_sets(tests: list[dict]) -> list[dict]:
-    """The impact files that form one roving test (hammer or sensor moves between sets).
+def _roving_groups(tests: list[dict]) -> list[list[dict]]:
+    """The impact files that form roving tests (hammer or sensor moves between sets).
 
-    At least two hammer-test files whose force and response channels carry node
-    numbers, and whose (hammer node, sensor node) pairs differ: a roving hammer (the
-    hammer node changes) or a roving sensor. Empty otherwise.
+    Hammer-test files whose force and response channels carry node numbers are grouped
+    by folder, in the order given; within a folder a (hammer node, sensor node) pair
+    seen again starts a new test (a repeat of the test). Each group of at least two
+    files is one roving test: a roving hammer (the hammer node changes) or a roving
+    sensor. Empty when there is none.
     """
     cand = [t for t in tests if t["kind"] == "impact" and "nodes" in t]
-    if len(cand) < 2 or len({t["nodes"] for t in cand}) != len(cand):
-        return []
-    return cand
+    folders: dict = {}
+    for t in cand:
+        folders.setdefault(Path(t["file"]).resolve().parent, []).append(t)
+    groups = []
+    for members in folders.values():
+        cur: list[dict] = []
+        for t in members:
+            if any(t["nodes"] == u["nodes"] for u in cur):
+                groups.append(cur)
+                cur = []
+            cur.append(t)
+        groups.append(cur)
+    return [g for g in groups if len(g) >= 2]
+
+
+def _roving_band(group: list[dict]) -> tuple[float, float, str]:
+    """Identification band of a roving test from its data: ``(fmin, fmax, why)``."""
+    lo = max(max(t["band_hz"][0] for t in group), 0.0)
+    hi = 0.95 * min(t["band_hz"][1] for t in group)
+    # the band from the data: around the reliable resonances any set showed (a mode on
+    # a nodal line of one hammer point is seen at another), inside the excited band
+    peaks = sorted({f for t in group for f in (t.get("fn_hz") or [])})
+    note = "excited band of the sets (no reliable resonance found)"
+    if peaks:
+        lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
+        note = (f"0.7 x the lowest and 1.2 x the highest of the reliable resonances of the "
+                f"sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
+    return max(lo, 0.02 * hi), hi, note
 
 
 def _fmt_list(values) -> str:
@@ -259,8 +287,13 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         paired with an FE mode of ``structure`` by frequency), every other hammer test
         ``[measurements.impact_2]``, ... (with its own reliable resonances), the free
         decays ``[measurements.decay]``, ``[measurements.decay_2]``, ..., a multi-point
-        FRF set (UFF 58 with node numbers) ``[modal]``. Files that fit none are listed in
-        the result with the reason.
+        FRF set (UFF 58 with node numbers) ``[modal]``. Hammer-test files with node
+        numbers form roving tests (grouped by folder; a repeated hammer/sensor node pair
+        starts another test): the first is ``[modal]`` (``sets``), every further one a
+        ``[measurements.roving_<k>]`` of kind ``multi-point`` (as every further
+        multi-point FRF file, ``[measurements.multipoint_<k>]``), identified on its own
+        and compared with ``[modal]``. Files that fit none are listed in the result with
+        the reason.
     name : str, optional
         Study name (default: the folder name).
     overwrite : bool
@@ -332,17 +365,18 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             return [commented]
         return [f"geometry = {_toml(_rel(Path(geometry), folder))}"]
 
-    roving = _roving_sets(tests) if modal is None else []
-    for t in roving:
-        t["kind"] = "impact" if t is impact else "roving set"
-        t["roving"] = True
+    groups = _roving_groups(tests)
+    roving = groups[0] if groups and modal is None else []
+    # further roving tests: multi-point measurements compared with the first
+    further = groups[1:] if roving else groups
+    for g in ([roving] if roving else []) + further:
+        for t in g:
+            t["kind"] = "impact" if t is impact else "roving set"
+            t["roving"] = True
     more_impacts = [t for t in tests if t["kind"] == "impact" and t is not impact
                     and not t.get("roving")]
     more_decays = [t for t in tests if t["kind"] == "decay" and t is not decay]
-    for t in tests:
-        if t["kind"] == "modal" and t is not modal:
-            t.update(kind="skipped", why="a second multi-point FRF set: a study identifies "
-                     "one [modal] test")
+    more_modal = [t for t in tests if t["kind"] == "modal" and t is not modal]
 
     lines = [
         f"# Validation study written by `mvtk init` from {len(tests)} measurement file(s).",
@@ -361,7 +395,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         "n_modes = 6",
         "",
     ]
-    if impact or decay or more_impacts:
+    if impact or decay or more_impacts or further or more_modal:
         lines.append("[measurements]")
         lines.append("")
     if impact:
@@ -399,9 +433,33 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             *opts_line(t),
             "",
         ]
+    for k, g in enumerate(further):
+        lo, hi, band_note = _roving_band(g)
+        lines += [
+            f"[measurements.roving_{k + 2}]   # another roving test of the specimen "
+            f"({len(g)} sets): identified on its own and compared with [modal]",
+            'kind = "multi-point"',
+            f"sets = {_toml([_rel(t['file'], folder) for t in g])}",
+            f"fmin_hz = {lo:.6g}   # {band_note}",
+            f"fmax_hz = {hi:.6g}",
+            *geometry_line("# geometry: that of [modal]"),
+            *opts_line(*g),
+            "",
+        ]
+    for k, t in enumerate(more_modal):
+        lines += [
+            f"[measurements.multipoint_{k + 2}]   # another multi-point FRF set: identified "
+            "on its own and compared with [modal]",
+            'kind = "multi-point"',
+            f"file = {_toml(_rel(t['file'], folder))}",
+            f"fmin_hz = {t['fmin']:.6g}",
+            f"fmax_hz = {t['fmax']:.6g}",
+            *opts_line(t),
+            "",
+        ]
     fn = (impact or {}).get("fn_hz") or []
     pairing: list[dict] = []
-    pair_note = ""
+    pair_note = mesh_note = ""
     mesh_hint: list[str] = []
     if impact and len(fn) >= 2:
         lines += [
@@ -419,7 +477,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         if is_toml:
             from ._config import CHECK_KEYS
 
-            rows, pair_note, mesh_hint = _pair_with_model(
+            rows, pair_note, mesh_hint, mesh_note = _pair_with_model(
                 s_path, fn, float(CHECK_KEYS["updated_fn_rel"]))
             pairing = [] if shaped else rows
         material = _first_material(s_path)
@@ -477,17 +535,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             "",
         ]
     if roving:
-        lo = max(max(t["band_hz"][0] for t in roving), 0.0)
-        hi = 0.95 * min(t["band_hz"][1] for t in roving)
-        # the band from the data: around the reliable resonances any set showed (a
-        # mode on a nodal line of one hammer point is seen at another), inside the
-        # excited band
-        peaks = sorted({f for t in roving for f in (t.get("fn_hz") or [])})
-        band_note = "excited band of the sets (no reliable resonance found)"
-        if peaks:
-            lo, hi = max(lo, 0.7 * peaks[0]), min(hi, 1.2 * peaks[-1])
-            band_note = (f"0.7 x the lowest and 1.2 x the highest of the reliable "
-                         f"resonances of the sets ({peaks[0]:.5g}..{peaks[-1]:.5g} Hz)")
+        lo, hi, band_note = _roving_band(roving)
         sets = _toml([_rel(t["file"], folder) for t in roving])
         kind = ("roving hammer" if len({t["nodes"][0] for t in roving}) > 1
                 else "roving sensor")
@@ -495,7 +543,7 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
             f"[modal]                 # {kind} test: {len(roving)} sets with node numbers "
             "(mvtk.modal)",
             f"sets = {sets}",
-            f"fmin_hz = {max(lo, 0.02 * hi):.6g}   # {band_note}",
+            f"fmin_hz = {lo:.6g}   # {band_note}",
             f"fmax_hz = {hi:.6g}",
 *geometry_line("# geometry = \"test_geometry.csv\"   # EDIT: node, x, y, z (m): "
                            "needed to correlate with the FE model"),
@@ -504,6 +552,9 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
         ]
     write_text(study_path, "\n".join(lines))
     log = [f"{t['file']}: {w}" for t in tests for w in t.get("warnings", [])]
+    if mesh_note:
+        log.append(f"mesh-convergence hint not computed: {mesh_note}")
+    log += [f"mesh-convergence hint: {x}" for x in mesh_hint]
     if log:
         write_text(folder / "init.log", "\n".join(log) + "\n")
     try:
@@ -517,20 +568,145 @@ def init_study(folder: str | Path, *, structure: str | Path | None = None,
                       pairing, mesh_hint)
 
 
-def _refined(desc: dict) -> dict | None:
-    """``desc`` with its generated mesh refined twice in each direction (None: an
-    imported mesh or deck, which ``mvtk init`` cannot refine)."""
+def split_mesh(mesh):
+    """An imported mesh with every element split into four (lines into two).
+
+    Each edge gets its midpoint (shared by the cells and lines on it), each quadrilateral
+    its centre; ``quad4`` -> 4 ``quad4``, ``tri3`` -> 4 ``tri3`` (corner triangles and
+    the middle one), ``line2`` -> 2 ``line2``, the orientation of every cell kept. An
+    element set holds the children of its cells; a node set gains the midpoints of the
+    edges and the centres of the quadrilaterals whose corners are all in it. The new
+    nodes lie on the straight edges: a faceted curved surface keeps its facets.
+
+    Parameters
+    ----------
+    mesh : mvtk.fe.ImportedMesh
+        First-order cells only (``tri3``, ``quad4``, ``line2``, ``vertex``).
+
+    Returns
+    -------
+    mvtk.fe.ImportedMesh
+
+    Raises
+    ------
+    ConfigError
+        The mesh holds nine-node quadrilaterals (not split).
+    """
+    from ..fe import ImportedMesh
+
+    if "quad9" in mesh.cells:
+        raise ConfigError("the mesh holds nine-node quadrilaterals (quad9), which mvtk init "
+                          "does not split")
+    nodes = [np.asarray(mesh.nodes, dtype=float)]
+    n0 = len(mesh.nodes)
+    mid: dict = {}
+    new: list = []
+
+    def midpoint(a: int, b: int) -> int:
+        key = (min(a, b), max(a, b))
+        if key not in mid:
+            mid[key] = n0 + len(new)
+            new.append(0.5 * (mesh.nodes[a] + mesh.nodes[b]))
+        return mid[key]
+
+    cells, centre = {}, {}
+    for kind, conn in mesh.cells.items():
+        conn = np.asarray(conn, dtype=int)
+        if kind == "quad4":
+            out = []
+            for i, (a, b, c, d) in enumerate(conn):
+                ab, bc, cd, da = midpoint(a, b), midpoint(b, c), midpoint(c, d), midpoint(d, a)
+                o = centre[i] = n0 + len(new)
+                new.append(0.25 * mesh.nodes[[a, b, c, d]].sum(axis=0))
+                out += [[a, ab, o, da], [ab, b, bc, o], [o, bc, c, cd], [da, o, cd, d]]
+        elif kind == "tri3":
+            out = []
+            for a, b, c in conn:
+                ab, bc, ca = midpoint(a, b), midpoint(b, c), midpoint(c, a)
+                out += [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]
+        elif kind == "line2":
+            out = []
+            for a, b in conn:
+                m = midpoint(a, b)
+                out += [[a, m], [m, b]]
+        else:
+            cells[kind] = conn
+            continue
+        cells[kind] = np.asarray(out, dtype=int).reshape(-1, conn.shape[1])
+    n_child = {"quad4": 4, "tri3": 4, "line2": 2}
+    element_sets = {}
+    for name, members in mesh.element_sets.items():
+        element_sets[name] = {}
+        for kind, idx in members.items():
+            k = n_child.get(kind, 1)
+            idx = np.asarray(idx, dtype=int)
+            element_sets[name][kind] = (k * idx[:, None] + np.arange(k)).ravel()
+    quads = np.asarray(mesh.cells.get("quad4", np.zeros((0, 4))), dtype=int)
+    node_sets = {}
+    for name, idx in mesh.node_sets.items():
+        inside = set(int(i) for i in idx)
+        more = [m for (a, b), m in mid.items() if a in inside and b in inside]
+        more += [centre[i] for i, q in enumerate(quads) if all(int(x) in inside for x in q)]
+        node_sets[name] = np.concatenate([np.asarray(idx, dtype=int),
+                                          np.asarray(sorted(more), dtype=int)])
+    all_nodes = np.vstack(nodes + ([np.asarray(new)] if new else []))
+    return ImportedMesh(all_nodes, cells, element_sets, node_sets,
+                        source=f"{mesh.source} (every element split into four)")
+
+
+def _write_inp(mesh, path: Path) -> None:
+    """Write an imported mesh as an Abaqus input file through meshio (element sets as
+    *ELSET, node sets as *NSET: :func:`mvtk.fe.read_mesh` reads them back)."""
+    import meshio
+
+    names = {"quad4": "quad", "tri3": "triangle", "line2": "line", "vertex": "vertex"}
+    kinds = list(mesh.cells)
+    out = meshio.Mesh(
+        mesh.nodes, [(names[k], mesh.cells[k]) for k in kinds],
+        cell_sets={n: [np.asarray(m.get(k, []), dtype=int) for k in kinds]
+                   for n, m in mesh.element_sets.items()},
+        point_sets={n: np.asarray(v, dtype=int) for n, v in mesh.node_sets.items()})
+    out.write(str(path), file_format="abaqus")
+
+
+def _refined(desc: dict, workdir: Path | None = None) -> tuple[dict | None, str]:
+    """``(description, why)``: ``desc`` with its mesh refined (None and the reason
+    when it cannot be).
+
+    A generated plate or beam: the mesh refined twice in each direction. An imported
+    mesh: every element split into four (:func:`split_mesh`), written as an Abaqus file
+    into ``workdir``. A Nastran deck or a mesh of nine-node elements is not refined.
+    """
     import copy
 
     st = desc.get("structure") or {}
     mesh = desc.get("mesh") or {}
-    if st.get("type", "plate") not in ("plate", "beam") or "file" in mesh:
-        return None
+    kind = st.get("type", "plate")
+    if kind == "mesh" or "file" in mesh:
+        f = Path(str(mesh.get("file", "")))
+        if f.suffix.lower() in _NASTRAN:
+            return None, (f"the structure is a Nastran deck ({f.name}): mvtk init does not "
+                          "refine it; refine it in the pre-processor and compare")
+        if workdir is None:
+            return None, "no folder to write the refined mesh into"
+        from ..fe import read_mesh
+
+        try:
+            fine = split_mesh(read_mesh(f))
+        except MvtkError as err:
+            return None, f"the mesh {f.name} was not refined: {err}"
+        path = Path(workdir) / (f.stem + "_split.inp")
+        _write_inp(fine, path)
+        out = copy.deepcopy(desc)
+        out["mesh"]["file"] = str(path)
+        return out, ""
+    if kind not in ("plate", "beam"):
+        return None, f"structure type {kind!r}: not refined"
     out = copy.deepcopy(desc)
     m = out.setdefault("mesh", {})
     if "element_size" in m:
         m["element_size"] = 0.5 * float(m["element_size"])
-    elif st.get("type") == "beam":
+    elif kind == "beam":
         key = "n_elements" if "n_elements" in m else "nx" if "nx" in m else "n_elements"
         m[key] = 2 * int(m.get(key, 40))
     elif "nx" in m or "ny" in m:
@@ -538,21 +714,25 @@ def _refined(desc: dict) -> dict | None:
             if k in m:
                 m[k] = 2 * int(m[k])
     else:
-        return None
-    return out
+        return None, "the plate's [mesh] gives neither element_size nor nx/ny"
+    return out, ""
 
 
 def _pair_with_model(structure: Path, fn_hz: list[float], tol: float
-                     ) -> tuple[list[dict], str, list[str]]:
+                     ) -> tuple[list[dict], str, list[str], str]:
     """Pair measured resonances with the FE modes of ``structure`` by frequency.
 
-    Returns ``(rows, note, mesh_hint)``: one row per paired resonance (``fn_hz``,
-    ``fe_mode`` 1-based among the elastic modes, ``fe_fn_hz``, ``df_pct``, and
-    ``fe_fn_refined_hz``, ``refined_change_pct`` on a mesh refined twice), or no rows
-    and a note saying why the model could not be solved (the pairing is then done when
-    the study runs); ``mesh_hint`` holds the lines of a mesh-convergence hint when the
-    refined mesh changes a paired mode by more than ``tol`` (relative).
+    Returns ``(rows, note, mesh_hint, mesh_note)``: one row per paired resonance
+    (``fn_hz``, ``fe_mode`` 1-based among the elastic modes, ``fe_fn_hz``, ``df_pct``,
+    and ``fe_fn_refined_hz``, ``refined_change_pct`` on the refined mesh of
+    :func:`_refined`), or no rows and a note saying why the model could not be solved
+    (the pairing is then done when the study runs); ``mesh_hint`` holds the lines of a
+    mesh-convergence hint when the refined mesh changes a paired mode by more than
+    ``tol`` (relative); ``mesh_note`` says why no refined mesh was solved (empty when
+    one was).
     """
+    import tempfile
+
     from ..fe import build_model, load_structure
     from ..updating import pair_by_frequency
     from ._stages import nominal_modes
@@ -563,7 +743,7 @@ def _pair_with_model(structure: Path, fn_hz: list[float], tol: float
         modes = nominal_modes(model, 1.3 * max(fn_hz), n_min=len(fn_hz) + 4)
     except MvtkError as err:
         return [], (f"the structure could not be solved ({err}): the targets are paired by "
-                    "frequency when the study runs"), []
+                    "frequency when the study runs"), [], ""
     f = np.asarray(modes.fn_hz, dtype=float)
     elastic = f[f >= 0.01 * min(fn_hz)]
     got = pair_by_frequency(fn_hz, elastic)
@@ -571,29 +751,40 @@ def _pair_with_model(structure: Path, fn_hz: list[float], tol: float
              "df_pct": 100.0 * (elastic[m] / fm - 1.0)}
             for fm, m in zip(fn_hz, got) if m >= 0]
     hint: list[str] = []
-    fine = _refined(desc)
-    if fine is not None and rows and model.n_dof < 60000:
-        try:
-            fm_ = np.asarray(nominal_modes(build_model(fine), 1.3 * max(fn_hz),
-                                           n_min=len(elastic) + 2).fn_hz, dtype=float)
-        except MvtkError:
-            fm_ = np.zeros(0)
-        fe_fine = fm_[fm_ >= 0.01 * min(fn_hz)]
-        for r in rows:
-            k = r["fe_mode"] - 1
-            if k < fe_fine.size:
-                r["fe_fn_refined_hz"] = float(fe_fine[k])
-                r["refined_change_pct"] = 100.0 * (fe_fine[k] / r["fe_fn_hz"] - 1.0)
-        worst = [r for r in rows if abs(r.get("refined_change_pct", 0.0)) > 100 * tol]
-        if worst:
-            hint = [f"MESH: a mesh refined twice in each direction changes the paired FE "
-                    f"mode(s) by more than the target tolerance ({100 * tol:g} %):"]
-            hint += [f"  FE mode {r['fe_mode']}: {r['fe_fn_hz']:.6g} Hz -> "
-                     f"{r['fe_fn_refined_hz']:.6g} Hz ({r['refined_change_pct']:+.2g} %)"
-                     for r in worst]
-            hint.append("EDIT the structure's [mesh] (finer) before updating: otherwise the "
-                        "update compensates the discretisation error with the parameters")
-    return rows, "", hint
+    imported = (desc.get("structure") or {}).get("type") == "mesh"
+    how = ("the mesh with every element split into four (its facets kept: a curved "
+           "surface is not refined, remesh it in the mesher to see that too)" if imported
+           else "a mesh refined twice in each direction")
+    with tempfile.TemporaryDirectory(prefix="mvtk-init-") as tmp:
+        fine, mesh_note = _refined(desc, Path(tmp))
+        if fine is not None and not rows:
+            fine, mesh_note = None, "no resonance paired with an FE mode"
+        if fine is not None and model.n_dof >= 60000:
+            fine, mesh_note = None, (f"the model has {model.n_dof} DOFs: a refined mesh "
+                                     "is not solved by mvtk init")
+        fm_ = np.zeros(0)
+        if fine is not None:
+            try:
+                fm_ = np.asarray(nominal_modes(build_model(fine), 1.3 * max(fn_hz),
+                                               n_min=len(elastic) + 2).fn_hz, dtype=float)
+            except MvtkError as err:
+                mesh_note = f"the refined mesh could not be solved ({err})"
+    fe_fine = fm_[fm_ >= 0.01 * min(fn_hz)]
+    for r in rows:
+        k = r["fe_mode"] - 1
+        if k < fe_fine.size:
+            r["fe_fn_refined_hz"] = float(fe_fine[k])
+            r["refined_change_pct"] = 100.0 * (fe_fine[k] / r["fe_fn_hz"] - 1.0)
+    worst = [r for r in rows if abs(r.get("refined_change_pct", 0.0)) > 100 * tol]
+    if worst:
+        hint = [f"MESH: {how} changes the paired FE mode(s) by more than the target "
+                f"tolerance ({100 * tol:g} %):"]
+        hint += [f"  FE mode {r['fe_mode']}: {r['fe_fn_hz']:.6g} Hz -> "
+                 f"{r['fe_fn_refined_hz']:.6g} Hz ({r['refined_change_pct']:+.2g} %)"
+                 for r in worst]
+        hint.append("EDIT the structure's mesh (finer) before updating: otherwise the "
+                    "update compensates the discretisation error with the parameters")
+    return rows, "", hint, mesh_note
 
 
 def _first_material(structure: Path) -> tuple[str, float] | None:

@@ -349,6 +349,7 @@ def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Chec
             else:
                 out.append(Check(label, z_m, z_hp, tol["zeta_consistency_rel"], "",
                                  source="consistency between sections"))
+    out += _multipoint_repeat_checks(res, tol)
     up = res.results.get("updating")
     if mod and up:
         used = {int(k) for k in up.get("target_test_modes") or [] if k is not None}
@@ -361,6 +362,31 @@ def _consistency_checks(res: StudyResult, tol: dict, confirm: dict) -> list[Chec
                 out.append(Check(f"MPD of test mode {int(m)} (shape used to pair a target)",
                                  float(mpd), float(tol["mpd_max_deg"]), 0.0, "deg",
                                  kind="upper", source="normal-mode shape"))
+    return out
+
+
+def _multipoint_repeat_checks(res: StudyResult, tol: dict) -> list[Check]:
+    """Every reliable mode of a further multi-point test against the reliable [modal]
+    mode it was paired with: frequency (``identified_fn_rel``), damping
+    (``zeta_consistency_rel``) and MAC on the common DOFs (``mac_min``)."""
+    mod = res.results.get("modal") or {}
+    out: list[Check] = []
+    ok_a = list(mod.get("table", {}).get("reliable", []))
+    for name, t in (mod.get("tests") or {}).items():
+        c, ok_b = t["comparison"], list(t["table"].get("reliable", []))
+        src = f"same specimen, two multi-point tests ({t['file']})"
+        for j, i in enumerate(c["paired_mode"]):
+            if not i or not (j < len(ok_b) and ok_b[j]) or not (i - 1 < len(ok_a)
+                                                                 and ok_a[i - 1]):
+                continue
+            what = f"mode {i} ({c['paired_fn_hz'][j]:.1f} Hz): multi-point test {name} vs [modal]"
+            out.append(Check(f"f of {what}", c["fn_hz"][j], c["paired_fn_hz"][j],
+                             tol["identified_fn_rel"], "Hz", source=src))
+            out.append(Check(f"zeta of {what}", c["zeta"][j], c["paired_zeta"][j],
+                             tol["zeta_consistency_rel"], "", source=src))
+            if np.isfinite(c["mac"][j]):
+                out.append(Check(f"MAC of {what}", c["mac"][j], float(tol["mac_min"]), 0.0,
+                                 "", kind="lower", source=src))
     return out
 
 
@@ -665,7 +691,11 @@ def _section_fe(rep: Report, res: StudyResult) -> None:
         sec.table(prm, "updating_parameters",
                   f"Updated parameters ({up['n_evaluations']} evaluations, "
                   f"condition number {up['condition_number']:.3g}, "
-                  f"identifiable: {up['identifiable']})", passed_column=None)
+                  f"identifiable: {up['identifiable']}; parameter std: "
+                  f"{up.get('covariance_scaling') or 'a posteriori (residual variance)'})",
+                  passed_column=None)
+        if up.get("residual_verdict"):
+            _updating_residuals(sec, up)
         for w in up.get("warnings", []):
             sec.note(w, kind="unavailable")
     elif "updating" in res.failed or "updating" in res.unavailable:
@@ -824,12 +854,17 @@ def _section_control(rep: Report, res: StudyResult) -> None:
     if act and act.get("piezo"):
         caps = ", ".join(f"{k} {1e9 * v:.4g} nF" for k, v in act["capacitance_F"].items())
         sec.text(
-            f"Piezo electrodes coupled in the shells (mvtk.fe.piezo_coupling): actuator "
-            f"'{act['name']}' (input, V), sensor(s) {', '.join(act['sensors'])} read as "
+            "Piezo electrodes coupled in the shells (mvtk.fe.piezo_coupling): "
+            + (f"actuator '{act['name']}' (input, V)" if len(act.get("actuators", [])) < 2
+               else f"actuators {', '.join(act['actuators'])} (inputs, V; a controller "
+               f"drives '{act['name']}' unless it names others, the static deflection "
+               "below is its)")
+            + f", sensor(s) {', '.join(act['sensors'])} read as "
             f"{act['sensing']} (the controllers' measurement is the first one, "
             f"{act['sensor_unit']}); blocked capacitances {caps}. The super element keeps "
-            "each electrode's static shape (mvtk.reduction.with_electrodes), so the "
-            "voltage-to-sensor feed-through of the collocated pair is kept. Static tip "
+            "each electrode's static shape and a block of residual inertia vectors "
+            "(mvtk.reduction.with_electrodes), so the voltage-to-sensor feed-through of "
+            "the collocated pair is kept. Static tip "
             f"deflection per volt: {1e6 * act['tip_per_volt_full_m']:.4g} um/V on the full "
             f"FE model, {1e6 * act['tip_per_volt_plant_m']:.4g} um/V from the plant "
             f"({act['plant_modes']} eigenmodes up to {act['plant_fn_max_hz']:.0f} Hz plus "
@@ -875,7 +910,11 @@ def _section_control(rep: Report, res: StudyResult) -> None:
              "at t = 0. Peak voltage in V and the equivalent edge moment in N m; closed-loop "
              "zeta of the linear controllers is the small-signal one (command below the "
              "limit). Settling time: after it the tip displacement stays "
-             f"within {100 * c['settle_band']:g} % of its initial amplitude."
+             f"within {100 * c['settle_band']:g} % of its initial amplitude. Gain and "
+             "phase margins: the loop broken at the actuator input "
+             "(mvtk.control.loop_margins), with the factor on the loop gain at the edge of "
+             "stability; – where there is none (open loop, a multi-input or nonlinear law, no "
+             "crossover)."
              + (f" {', '.join(lyap)}: the velocity form of the Lyapunov controller with a "
                 "boundary layer (mvtk.control.LyapunovBangBang); being nonlinear it has no "
                 "closed-loop poles (zeta shown as –)." if lyap else ""))
@@ -906,6 +945,41 @@ def _png(b64: str) -> bytes:
     return base64.b64decode(b64)
 
 
+#: How the report's text counts the updating residual verdicts.
+_VERDICT_TEXT = {"noise": "within identification noise",
+                 "model-form term": "explained by the model-form term",
+                 "model form": "model form (beyond noise and the model-form term)",
+                 "no redundancy": "not testable (no redundancy)"}
+
+
+def _updating_residuals(sec, up: dict) -> None:
+    """The updating residuals with their standard deviations and noise/model-form verdicts."""
+    n = len(up["targets_hz"])
+    rows = (up.get("summary") or {}).get("residuals") or [{}] * n
+    labels = [r.get("target", f"f{i + 1}") for i, r in enumerate(rows)]
+    tab = pd.DataFrame({
+        "target": labels, "target_hz": up["targets_hz"], "updated_hz": up["fn_hz"],
+        "residual_hz": up["residual_hz"],
+        "identification_std_hz": up["identification_std_hz"],
+        "std from": up.get("target_std_source") or [""] * n,
+        "std_hz": up["target_std_hz"],
+        "noise_limit_hz": up["noise_limit_hz"],
+        "model_form_limit_hz": up["limit_hz"],
+        "verdict": up["residual_verdict"]})
+    mf = up.get("model_form_std")
+    term = (f"a model-form term of {100 * mf:.3g} % of the frequency" if mf is not None
+            else "no model-form term")
+    sec.table(tab, "updating_residuals",
+              "Updating residuals against their standard deviations: std = identification "
+              f"std combined with {term}, each target weighted by 1/std^2; the limits are "
+              "twice the residual's standard deviation after the fit (noise alone; noise "
+              "and the model-form term). Verdict: noise (within the noise limit), "
+              "model-form term (explained by the stated model-form term), model form "
+              "(beyond both: the model lacks something no updated value supplies), "
+              "no redundancy (as many parameters as targets fit it exactly)",
+              passed_column=None)
+
+
 def _model_form_text(res: StudyResult) -> str | None:
     """What updating explains and what it cannot: residuals vs identification scatter."""
     up = res.results.get("updating")
@@ -916,23 +990,50 @@ def _model_form_text(res: StudyResult) -> str | None:
     resid = 100 * np.abs(f_up / f_t - 1)
     parts = [f"After updating {len(up['parameters'])} parameter(s) against {len(f_t)} "
              f"target frequencies the residual is {resid.min():.2g}-{resid.max():.2g} %."]
+    verdicts = list(up.get("residual_verdict") or [])
+    counted = {v: verdicts.count(v) for v in ("noise", "model-form term", "model form",
+                                              "no redundancy") if v in verdicts}
     mod = res.results.get("modal")
-    if mod:
+    if counted:
+        vf = up.get("variance_factor")
+        parts.append(
+            "Against the targets' standard deviations (identification and model-form "
+            "term, table below): "
+            + ", ".join(f"{v} {_VERDICT_TEXT[k]}" for k, v in counted.items()) + "."
+            + (f" The variance factor chi^2 / (m - n) = {vf:.3g} tests the stated "
+               "standard deviations (about 1 when they describe the residuals)."
+               if vf is not None and np.isfinite(vf) else ""))
+    elif mod:
         fn_id = np.asarray(mod["table"]["fn_hz"], dtype=float)
         near = [fn_id[np.argmin(np.abs(fn_id - f))] for f in f_t]
         scatter = 100 * np.abs(np.asarray(near) / f_t - 1)
         parts.append(f"The same modes identified independently from the multi-point test "
-                     f"differ from the targets by at most {scatter.max():.2g} %: the "
-                     "identification uncertainty of a frequency is far below the residual, so "
-                     "the residual is model-form error (what no value of the updated "
-                     "parameters can remove), not measurement noise.")
+                     f"differ from the targets by at most {scatter.max():.2g} %.")
     std = np.asarray(up["std"], dtype=float)
+    cov = np.asarray(up.get("covariance") or [[]], dtype=float)
+    if cov.ndim == 2 and cov.shape[0] >= 2 and np.isfinite(cov).all():
+        d = np.sqrt(np.diag(cov))
+        names = [p for p, s in zip(up["parameters"], std) if np.isfinite(s)]
+        if d.all() and len(names) == cov.shape[0]:
+            rho = cov / np.outer(d, d)
+            pairs = [f"{names[i]} / {names[j]} {rho[i, j]:+.2f}"
+                     for i in range(len(names)) for j in range(i + 1, len(names))]
+            parts.append("Correlation of the updated parameters (from their covariance "
+                         "(J' W J)^-1): " + ", ".join(pairs) + ".")
     if np.isfinite(std).any():
-        parts.append("The parameter standard deviations (from the Jacobian and the residual "
-                     "variance) describe the scatter of the fit, not the bias that the "
+        parts.append("The parameter standard deviations (from the Jacobian and the "
+                     "targets' standard deviations) describe the scatter of the fit, not the "
+                     "bias that the "
                      "model-form error puts on the parameters: an updated parameter can be "
                      "several standard deviations from the specimen's own value.")
     return " ".join(parts)
+
+
+def _slug(name: str) -> str:
+    """A file-name part of a test name (letters, digits, underscores)."""
+    import re
+
+    return re.sub(r"[^A-Za-z0-9_]+", "_", str(name)).strip("_") or "test"
 
 
 def _section_multipoint(rep: Report, res: StudyResult) -> None:
@@ -954,6 +1055,19 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
     sec.figure(_png(mod["figures"]["stabilisation"]),
                "Stabilisation diagram (CMIF behind); dashed: selected modes")
     sec.figure(_png(mod["figures"]["synthesis"]), "Measured vs synthesised FRFs")
+    for name, t in (mod.get("tests") or {}).items():
+        n_common = (t["comparison"]["n_common_dofs"] or [0])[0]
+        sec.text(f"Multi-point test {name}, {t['file']}: {t['n_responses']} responses x "
+                 f"{t['n_references']} reference(s), {t['n_lines']} lines, identified on "
+                 f"its own in {t['band_hz'][0]:g}-{t['band_hz'][1]:g} Hz; each of its modes "
+                 "beside the mode of the test above nearest in frequency (within "
+                 f"modal.pair_within; 0: none), MAC on the {n_common} DOFs both tests measured."
+                 + (f" {t['note'][0].upper()}{t['note'][1:]}." if t.get("note") else ""))
+        sec.table(pd.DataFrame(t["table"]), f"modal_modes_{_slug(name)}",
+                  f"Identified modes of multi-point test {name}", passed_column=None)
+        sec.table(pd.DataFrame(t["comparison"]), f"modal_compare_{_slug(name)}",
+                  f"Multi-point test {name} vs the test above: the same modes",
+                  passed_column=None)
     if "correlation" not in res.results:
         _stage_missing(sec, res, "correlation")
         return
@@ -1000,11 +1114,16 @@ def _stage_warnings(res: StudyResult) -> list[str]:
                 out += [f"{stage}: {w}" for w in (sub.get("warnings") or [])]
     mod = res.results.get("modal")
     if mod:
-        t = pd.DataFrame(mod["table"])
-        if "reliable" in t:
-            for _, row in t[~t["reliable"].astype(bool)].iterrows():
-                out.append(f"modal: identified mode {int(row['mode'])} at "
-                           f"{row['fn_hz']:.4g} Hz is not reliable: {row.get('reason', '')}")
+        for name, tab in [("", mod["table"])] + [(f" of {n}", t["table"]) for n, t in
+                                                (mod.get("tests") or {}).items()]:
+            t = pd.DataFrame(tab)
+            if "reliable" in t:
+                for _, row in t[~t["reliable"].astype(bool)].iterrows():
+                    out.append(f"modal: identified mode {int(row['mode'])}{name} at "
+                               f"{row['fn_hz']:.4g} Hz is not reliable: "
+                               f"{row.get('reason', '')}")
+        for t in (mod.get("tests") or {}).values():
+            out += [f"modal: {w}" for w in t.get("warnings") or []]
     cor = res.results.get("correlation")
     if cor:
         pairs = pd.DataFrame(cor["pairs"])
@@ -1019,6 +1138,13 @@ def _stage_warnings(res: StudyResult) -> list[str]:
                 out.append(f"updating: {name} ended at a bound of its range")
         if up.get("identifiable") is False:
             out.append("updating: the parameters are not identifiable from the targets")
+        rows = (up.get("summary") or {}).get("residuals") or []
+        beyond = [r.get("target", f"f{i + 1}") for i, (r, v) in
+                  enumerate(zip(rows, up.get("residual_verdict") or [])) if v == "model form"]
+        if beyond:
+            out.append(f"updating: the residual of {', '.join(beyond)} is beyond noise and "
+                       "the model-form term (model form: the model lacks something no "
+                       "updated value supplies)")
     return list(dict.fromkeys(out))
 
 
@@ -1161,6 +1287,7 @@ def build_report(res: StudyResult, hashes: dict[str, str]) -> Path:
     tests = sorted(p.name for p in res.study.measurement_files.values())
     if "modal" in res.results:
         tests.append(res.results["modal"]["file"])
+        tests += [t["file"] for t in (res.results["modal"].get("tests") or {}).values()]
     sf = res.study.structure_file
     model = sf.name if sf is not None else "the inline structure"
     rep.executive_summary(

@@ -183,6 +183,36 @@ _DECAY = Table(
      "read_options": _read_options()},
 )
 
+_MULTI = Table(
+    "A further multi-point test of the specimen (kind = \"multi-point\"), beside the one of "
+    "[modal]: another roving-hammer or roving-sensor test, a repeat, a test on another "
+    "day. It is identified on its own (mvtk.modal.identify, pLSCF + LSFD) in the modal "
+    "stage, and each of its modes is compared with the [modal] mode nearest in frequency "
+    "(within modal.pair_within): frequency, damping and MAC on the DOFs both tests "
+    "measured. [modal] stays the test whose shapes pair the updating targets and are "
+    "correlated with the FE model.",
+    {"kind": Key("str", "Kind of the test: \"multi-point\".", REQUIRED,
+                 choices=("multi-point",)),
+     "file": Key("path", "FRF file (as modal.file), relative to the study file. Give either "
+                 "'file' or 'sets'.", None),
+     "sets": Key("strings", "Time-history files, one measurement set per file (as "
+                 "modal.sets), relative to the study file.", None, min_length=1),
+     "reference": Key("str", "Force channel of the sets (None: the channels whose quantity "
+                      "is force).", None),
+     "excitation": Key("str", "Excitation of the sets (auto: detected from the force).",
+                       "auto", choices=("auto", "impact", "random", "sweep")),
+     "geometry": Key("path", "Test geometry (as modal.geometry; None: that of [modal]).",
+                     None),
+     "fmin_hz": _pos("Lower end of the identification band (None: modal.fmin_hz).", None,
+                     "Hz"),
+     "fmax_hz": _pos("Upper end of the identification band (None: modal.fmax_hz).", None,
+                     "Hz"),
+     "max_order": Key("int", "Highest pLSCF model order (None: mvtk.modal's default).",
+                      None, minimum=4),
+     "read_options": _read_options()},
+    one_of=(("file", "sets"),),
+)
+
 _PARAMETER = Table(
     "One updating parameter (mvtk.updating.Parameter).",
     {"path": Key("str", "Dotted path into the structure description, e.g. "
@@ -206,7 +236,10 @@ _TARGET = Table(
      "label": Key("str", "Label in tables.", None),
      "shape": Key("numbers", "Measured mode shape at the model's sensor DOFs.", None),
      "kind": Key("str", "Mode kind the pairing must respect (bending, torsion, ...).",
-                 None)},
+                 None),
+     "std_hz": Key("number", "Standard deviation of fn_hz from its identification "
+                   "(None: the fn_std_hz of the [modal] mode paired with the target, if "
+                   "any).", None, "Hz", minimum=0.0)},
 )
 
 _RETAINED = Table(
@@ -224,7 +257,11 @@ _CTRL_COMMON = {
     "name": Key("str", "Name of the controller in tables (unique, not 'open loop').",
                 REQUIRED),
     "type": Key("str", "Control law.", REQUIRED,
-                choices=("PPF", "SRF", "LyapunovBangBang", "VelocityFeedback")),
+                choices=("PPF", "SRF", "LyapunovBangBang", "VelocityFeedback", "LQR")),
+    "actuator": Key("str", "Plant input driven (a name of control.actuators; None: the "
+                    "first).", None),
+    "sensor": Key("str", "Plant output measured, e.g. 'Q:<electrode>' (None: the first "
+                  "sensor).", None),
     "u_max": _pos("Actuator limit: the command is clipped to +-u_max (None: no limit).",
                   None, "V"),
     "method": Key("str", "Simulation method (mvtk.control.simulate).", "auto",
@@ -247,6 +284,15 @@ CONTROLLER_SCHEMAS = {
     "VelocityFeedback": Table("Direct velocity feedback u = -g v.",
                               {**_CTRL_COMMON, "gain": Key("number", "Gain (V s/m).",
                                                            REQUIRED, minimum=0.0)}),
+    "LQR": Table(
+        "Linear-quadratic regulator u = -K x on one or several actuators (full state, "
+        "energy weighting x'Qx = twice the mechanical energy).",
+        {**{k: v for k, v in _CTRL_COMMON.items() if k not in ("actuator", "sensor")},
+         "R": _pos("Weight of the squared command against the energy weighting.",
+                   units="J/V^2"),
+         "q_scale": _pos("Factor on the energy weighting Q.", 1.0),
+         "actuators": Key("strings", "Plant inputs driven (names of control.actuators; "
+                          "None: the first).", None, min_length=1)}),
     "LyapunovBangBang": Table(
         "Lyapunov (bang-bang) control u = -u_max sign(B' dq/dt) with a boundary layer.",
         {**_CTRL_COMMON,
@@ -295,7 +341,8 @@ SCHEMA: dict[str, Table] = {
         "The measured tests, any number, each a named table: [measurements.impact], "
         "[measurements.broadband] and [measurements.decay] have their kind by name; any "
         "other name, e.g. [measurements.hit_2] or [measurements.decay_tip], says kind = "
-        "\"impact\" or \"decay\" and takes the keys of that kind. Every impact test gives "
+        "\"impact\", \"decay\" or \"multi-point\" and takes the keys of that kind. Every "
+        "impact test gives "
         "a half-power estimate of the modes it searches (its fn_hz), every decay an "
         "envelope and log-decrement estimate of its mode; the same mode from two tests is "
         "a consistency check of the report.", {
@@ -304,6 +351,9 @@ SCHEMA: dict[str, Table] = {
         "broadband": Key("table", "Short broadband impact test for the higher modes "
                          "(listed in damping.broadband_fn_hz).", None, table=_IMPACT),
         "decay": Key("table", "Free decay after release from mode 1.", None, table=_DECAY),
+        "<name>": Key("table", "A further multi-point test of any name, kind = "
+                      "\"multi-point\" (needs [modal], the test the others are compared "
+                      "with).", None, table=_MULTI),
     }),
     "modal": Table(
         "A multi-point FRF test identified by mvtk.modal (pLSCF + LSFD). Its shapes pair the "
@@ -378,7 +428,16 @@ SCHEMA: dict[str, Table] = {
                                minimum=0.0),
          "mac_weight": Key("number", "Weight of the (1 - MAC) residuals.", 0.0, minimum=0.0),
          "frequency_std": _pos("Relative standard deviation of the measured frequencies "
-                               "(parameter standard deviations).", None),
+                               "of targets without an identification std.", None),
+         "model_form_std": Key(
+             "number", "Relative standard deviation of the model-form term: what no "
+             "value of the updated parameters can reproduce (boundaries, joints, sensor "
+             "masses). Each target is weighted by 1/sigma^2 with sigma^2 = std_hz^2 + "
+             "(model_form_std fn)^2; a residual within 2 sigma of the identification "
+             "alone is noise, within 2 sigma with this term is explained by it, beyond "
+             "is model form. 0.005: the residual the example smart beam keeps after "
+             "updating (0.13-0.51 %), far above identification stds (1e-5..1e-3).",
+             0.005, minimum=0.0, maximum=1.0, exclusive_maximum=True),
          "builder": Key("str", "'package.module:function' building an FEModel from the "
                         "description (None: mvtk.fe.build_model).", None)},
         one_of=(("targets_hz", "targets"),)),
@@ -416,8 +475,9 @@ SCHEMA: dict[str, Table] = {
                                "piezo electrodes).", None, length=2),
          "sensor_node": Key("str", "Retained node of the tip sensor (uz).", REQUIRED),
          "actuators": Key("strings", "Piezo patches or electrodes driven by the controllers "
-                          "(mvtk.fe.piezo_coupling on any shell structure); the plant "
-                          "input is the first one's voltage.", None, min_length=1),
+                          "(mvtk.fe.piezo_coupling on any shell structure); each one's "
+                          "voltage is a plant input, the first one is the controllers' "
+                          "default.", None, min_length=1),
          "sensors": Key("strings", "Piezo patches or electrodes read by the controllers "
                         "(charge or voltage, see 'sensing'); the first one is the "
                         "controllers' measurement.", None, min_length=1),
@@ -646,7 +706,8 @@ _MEASUREMENT_KIND = {"impact": "impact", "broadband": "impact", "decay": "decay"
 
 
 def _validate_measurements(d: Any, source: str) -> dict:
-    """``[measurements]``: any number of named tests, each of kind impact or decay."""
+    """``[measurements]``: any number of named tests, each of kind impact, decay or
+    multi-point (the latter by its ``kind`` key only)."""
     loc = f"{source}: " if source else ""
     if not isinstance(d, Mapping):
         raise ConfigError(f"{loc}[measurements]: expected a table of named tests, got {d!r}")
@@ -662,13 +723,17 @@ def _validate_measurements(d: Any, source: str) -> dict:
         if "kind" not in m and str(name) not in _MEASUREMENT_KIND:
             err = unknown_key_error(name, "measurements", _MEASUREMENT_KIND, source)
             raise ConfigError(f"{err}; a measurement of another name says its kind "
-                              "(kind = \"impact\" or \"decay\")")
-        if kind not in ("impact", "decay"):
+                              "(kind = \"impact\", \"decay\" or \"multi-point\")")
+        if kind not in ("impact", "decay", "multi-point"):
             raise ConfigError(
-                f"{loc}[{where}]: expected kind = \"impact\" or \"decay\" (a measurement "
-                "named other than impact, broadband or decay says its kind), got "
-                f"{kind!r}")
-        table = SCHEMA["measurements"].keys["decay" if kind == "decay" else "impact"].table
+                f"{loc}[{where}]: expected kind = \"impact\", \"decay\" or \"multi-point\" "
+                "(a measurement named other than impact, broadband or decay says its kind), "
+                f"got {kind!r}")
+        if kind == "multi-point" and str(name) in _MEASUREMENT_KIND:
+            raise ConfigError(f"{loc}[{where}]: a multi-point test needs a name of its own "
+                              f"(not {name!r}, the name of the {_MEASUREMENT_KIND[name]} test)")
+        table = (_MULTI if kind == "multi-point" else
+                 SCHEMA["measurements"].keys["decay" if kind == "decay" else "impact"].table)
         out[name] = validate_table(m, table, where, source)
     return out
 

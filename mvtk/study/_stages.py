@@ -462,7 +462,10 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
 
     ``S = d ln f / d ln p`` (targets x free parameters, :attr:`UpdateResult.sensitivity`)
     is the Jacobian of the log-frequencies in log-parameters: ``S'S`` is the Fisher
-    matrix for a uniform relative frequency error. The update is *identifiable* when
+    matrix for a uniform relative frequency error, ``S'WS`` for targets of relative
+    standard deviations ``s_i`` (``W = diag(s_min^2 / s_i^2)``, the update's weights
+    scaled to 1 for the best-known target: equal standard deviations give ``S'S``); its
+    rows are weighted so. The update is *identifiable* when
     :func:`mvtk.updating.update` found no null direction, no parameter ended on a bound,
     and ``cond(S) = s_max / s_min <= cond_max`` (a relative frequency error ``e`` moves
     the weakest parameter combination by up to ``cond(S) e / s_max``). Otherwise the
@@ -478,6 +481,11 @@ def identifiability(res, paths: list[str], cond_max: float) -> dict:
         (str, empty when identifiable) and ``identifiable_combination`` (str).
     """
     S = np.asarray(res.sensitivity, dtype=float)
+    sd = getattr(res, "target_std_hz", None)
+    if sd is not None and S.ndim == 2:
+        rel = np.asarray(sd, dtype=float) / np.array([t.fn_hz for t in res.targets])
+        if rel.size == S.shape[0] and np.all(np.isfinite(rel) & (rel > 0)):
+            S = S * (rel.min() / rel)[:, None]
     free = [p for p, prm in zip(paths, res.parameters) if not prm.fixed]
     at_bound = [p for p, b in zip(paths, np.asarray(res.at_bound, bool)) if b]
     why = []
@@ -533,76 +541,55 @@ def _normal_mode_shapes(study: Study, targets: list, attached: list, modal_resul
 def updating(study: Study, modal_arrays=None, modal_result=None):
     """Sensitivity-based update of the configured parameters to the target frequencies.
 
-    Reads ``[updating]``: ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables,
-    ``parameters`` (a field absent from the structure is created with ``initial``) and
-    the solver settings (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``,
-    ``frequency_std``, ``builder``). With a ``[modal]`` test (``modal_arrays``, the
+    Reads ``[updating]`` through :func:`mvtk.study._updating.updating_inputs`:
+    ``targets_hz`` (labels f1, f2, ...) or ``targets`` tables, ``parameters`` (a field
+    absent from the structure is created with ``initial``) and the solver settings
+    (``max_iter``, ``n_modes``, ``regularization``, ``mac_weight``, ``frequency_std``,
+    ``model_form_std``, ``builder``). With a ``[modal]`` test (``modal_arrays``, the
     identified shapes) and ``modal.pair_updating``, each target carries the identified
-    shape nearest in frequency, so the FE modes are paired by MAC.
+    shape nearest in frequency, so the FE modes are paired by MAC; with its mode table
+    (``modal_result``) each target carries the identified ``fn_std_hz`` as its
+    standard deviation, and the update weights the targets by ``1 / sigma^2`` with the
+    model-form term ``model_form_std`` (:func:`mvtk.updating.update`).
     """
-    from ..updating import FrequencyTarget, Parameter, update
-    from ._updating import create_missing, import_builder
+    from ..updating import update
+    from ._updating import updating_inputs
 
     cfg = study.section("updating")
-    desc = study.description()
-    params = []
-    for i, p in enumerate(cfg["parameters"]):
-        where = f"updating.parameters[{i}]"
-        if p.get("initial") is not None:
-            # a field absent from the nominal description (e.g. an elastic clamp) starts
-            # at the configured value
-            create_missing(desc, p["path"], p["initial"], where)
-        params.append(Parameter.from_dict({k: v for k, v in p.items() if v is not None},
-                                          where))
-    if cfg.get("targets_hz") is not None:
-        targets = [FrequencyTarget(float(f), label=f"f{i + 1}")
-                   for i, f in enumerate(cfg["targets_hz"])]
-    else:
-        targets = [FrequencyTarget.from_dict(dict(t), f"updating.targets[{i}]")
-                   for i, t in enumerate(cfg["targets"])]
-    attached = [None] * len(targets)
-    modal_cfg = study.section("modal")
-    builder = import_builder(cfg["builder"]) if cfg.get("builder") is not None else None
-    if builder is None:
-        from ..fe import build_model as builder_or_default
-    else:
-        builder_or_default = builder
-    nominal_model = None
-    dropped: list[str] = []
-    if modal_arrays is not None and modal_cfg is not None and modal_cfg["pair_updating"]:
-        from ._ema import shape_targets
-
-        nominal_model = builder_or_default(desc)
-        targets, attached = shape_targets(study, targets, modal_arrays, nominal_model)
-        targets, attached, dropped = _normal_mode_shapes(study, targets, attached,
-                                                         modal_result)
-    targets, pairing_table = pair_targets(desc, targets, builder_or_default, nominal_model)
-    kwargs = {k: cfg[k] for k in ("n_modes", "regularization", "mac_weight", "frequency_std")
-              if cfg.get(k) is not None}
-    if builder is not None:
-        kwargs["builder"] = builder
-    else:
-        kwargs["affine"] = _affine_parameters(desc, [p.path for p in params])
+    inp = updating_inputs(study, modal_arrays, modal_result)
+    params, targets, kwargs = inp["parameters"], inp["targets"], inp["kwargs"]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = update(desc, params, targets, max_iter=int(cfg.get("max_iter", 30)), **kwargs)
+        res = update(inp["description"], params, targets, **kwargs)
+    table = res.residual_table()
     result = {
         "success": bool(res.success), "message": str(res.message),
         "affine": bool(kwargs.get("affine", False)),
         "affine_check_rel": res.meta.get("affine_check_rel"),
         "parameters": [p.path for p in params],
         "initial_values": res.initial_values, "values": res.values, "std": res.std,
+        "covariance": np.asarray(res.covariance, dtype=float).tolist(),
+        "covariance_scaling": res.meta.get("covariance_scaling"),
         "at_bound": res.at_bound,
         "targets_hz": [float(t.fn_hz) for t in targets],
-        "target_test_modes": attached,
+        "target_test_modes": inp["attached"],
+        "target_std_source": inp["std_source"],
+        "identification_std_hz": table["id_std_hz"].to_numpy(dtype=float),
+        "target_std_hz": table["std_hz"].to_numpy(dtype=float),
+        "model_form_std": res.meta.get("model_form_std"),
+        "residual_hz": table["residual_hz"].to_numpy(dtype=float),
+        "noise_limit_hz": table["noise_limit_hz"].to_numpy(dtype=float),
+        "limit_hz": table["limit_hz"].to_numpy(dtype=float),
+        "residual_verdict": list(res.verdicts),
+        "variance_factor": res.meta.get("variance_factor"),
         "pairing": list(res.pairing_method),
         "mac": [float(v) for v in np.asarray(res.mac, dtype=float)],
         "fn_hz_initial": res.fn_hz_initial, "fn_hz": res.fn_hz,
         "modes": res.modes, "model_fn_hz": res.model_fn_hz,
         "model_kinds": list(res.model_kinds),
         "identifiable": bool(res.identifiable), "condition_number": res.condition_number,
-        "nominal_pairing": pairing_table,
-        "shapes_not_used": dropped,
+        "nominal_pairing": inp["pairing_table"],
+        "shapes_not_used": inp["shapes_not_used"],
         **identifiability(res, [p.path for p in params], float(cfg["identifiability_cond_max"])),
         "n_evaluations": res.n_evaluations,
         "description": res.description,
@@ -909,10 +896,11 @@ def reduction(study: Study, description: dict, model_damping: dict | None):
 
 
 def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
-    """Plant of piezo electrodes on any shell structure: the first actuator's voltage in,
-    the sensors' charge or voltage and the sensor node's displacement (``"tip"``) out,
-    on the super element with the electrodes' static shapes
-    (:func:`mvtk.reduction.with_electrodes`)."""
+    """Plant of piezo electrodes on any shell structure: every actuator's voltage in
+    (``control.actuators``, in order), the sensors' charge or voltage and the sensor
+    node's displacement (``"tip"``) out, on the super element with the electrodes'
+    static shapes and residual inertia vectors (:func:`mvtk.reduction.with_electrodes`).
+    The DC gains reported are those of the first actuator."""
     import dataclasses
 
     from ..control import piezo_plant
@@ -938,14 +926,14 @@ def _piezo_plant(model, se, named: dict, cfg: dict, ctl: dict, model_damping):
     se_e, _ = with_electrodes(se, cp)
     tip = named[ctl["sensor_node"]]
     n_plant = min(int(cfg.get("plant_modes", 12)), se_e.n_dof)
-    plant = piezo_plant(se_e, cp, acts[:1], sens, sensing=ctl.get("sensing", "charge"),
+    plant = piezo_plant(se_e, cp, acts, sens, sensing=ctl.get("sensing", "charge"),
                         points=[(tip, "uz")], form="modal", n_modes=n_plant,
                         static_correction=True, **damp)
     plant = dataclasses.replace(plant, outputs=plant.outputs[:-1] + ("tip",))
     i_a = cp.names.index(acts[0])
     w_full = float(model.expand(static_solve(model, cp.B[:, i_a]))[tip, 2])
     emcc = [r for r in modal_emcc(model, cp, n_modes=min(6, model.n_dof - 1),
-                                  electrodes=acts[:1] + [n for n in sens if n != acts[0]])]
+                                  electrodes=acts + [n for n in sens if n not in acts])]
     act = {"piezo": True, "name": acts[0], "actuators": acts, "sensors": sens,
            "sensing": ctl.get("sensing", "charge"), "damping": damp_text,
            "capacitance_F": {n: float(cp.C[cp.names.index(n)]) for n in acts + sens},
@@ -1008,7 +996,7 @@ def control(study: Study, plant_arrays, fn1_hz: float):
         pa["M"].values, pa["C"].values, pa["K"].values, pa["B"].values, pa["Cq"].values,
         pa["Cv"].values, inputs=[str(v) for v in pa["input"].values],
         outputs=[str(v) for v in pa["output"].values],
-        coords=[str(v) for v in pa["coord"].values], input_units=["V"],
+        coords=[str(v) for v in pa["coord"].values], input_units=["V"] * pa.sizes["input"],
         output_units=str(pa.attrs.get("output_units", "m")).split("|"),
         D=pa["D"].values,
     )
@@ -1037,20 +1025,40 @@ def control(study: Study, plant_arrays, fn1_hz: float):
     n = plant.n_coords
     # generalised actuator force times velocity, B' q', of the open loop (for a boundary
     # layer given relative to its initial amplitude)
-    switching = plant.B[:, 0] @ open_sim["states"].values[n:, :]
-    switching_peak = float(np.max(np.abs(switching)))
+    switching = {a: plant.B[:, i] @ open_sim["states"].values[n:, :]
+                 for i, a in enumerate(plant.inputs)}
+    switching_peaks = {a: float(np.max(np.abs(v))) for a, v in switching.items()}
+    switching_peak = switching_peaks[plant.inputs[0]]
     for c in cfg.get("controllers", []):
         kind = c["type"]
+        where = f"control.controllers[{c['name']!r}]"
+        for key, names in (("actuator", plant.inputs), ("sensor", plant.outputs)):
+            if c.get(key) is not None and c[key] not in names:
+                raise ConfigError(f"{where}.{key}: {c[key]!r} is not a plant "
+                                  f"{'input' if key == 'actuator' else 'output'}; "
+                                  f"expected one of {list(names)}")
         if kind in ("PPF", "SRF"):
             ctrl = getattr(mc, kind)(targets=[(float(c["f_hz"]), float(c["zeta_f"]),
                                                float(c["gain"]))],
+                                     sensor=c.get("sensor"), actuator=c.get("actuator"),
                                      u_max=c.get("u_max"))
         elif kind == "VelocityFeedback":
-            ctrl = VelocityFeedback(float(c["gain"]), u_max=c.get("u_max"))
+            ctrl = VelocityFeedback(float(c["gain"]), sensor=c.get("sensor"),
+                                    actuator=c.get("actuator"), u_max=c.get("u_max"))
+        elif kind == "LQR":
+            acts = c.get("actuators") or [plant.inputs[0]]
+            bad = [a for a in acts if a not in plant.inputs]
+            if bad:
+                raise ConfigError(f"{where}.actuators: {bad} are not plant inputs; "
+                                  f"expected names from {list(plant.inputs)}")
+            ctrl = mc.LQR(R=float(c["R"]), q_scale=float(c.get("q_scale", 1.0)),
+                          actuator=list(acts), u_max=c.get("u_max"))
         else:
             eps = (float(c["boundary_layer"]) if "boundary_layer" in c
-                   else float(c["boundary_layer_rel"]) * switching_peak)
-            ctrl = LyapunovBangBang(u_max=float(c["u_max"]), boundary_layer=eps)
+                   else float(c["boundary_layer_rel"])
+                   * switching_peaks[c.get("actuator") or plant.inputs[0]])
+            ctrl = LyapunovBangBang(u_max=float(c["u_max"]), boundary_layer=eps,
+                                    actuator=c.get("actuator"))
         runs[str(c["name"])] = ctrl
         methods[str(c["name"])] = str(c.get("method", "auto"))
         rates[str(c["name"])] = (float(c["control_rate_hz"]) if "control_rate_hz" in c
@@ -1063,7 +1071,11 @@ def control(study: Study, plant_arrays, fn1_hz: float):
                                                      initial=x0, method=methods[name],
                                                      control_rate_hz=rates[name])
         y = sim["outputs"].sel(output="tip").values
-        u = sim["inputs"].values[0] if "inputs" in sim else np.zeros_like(y)
+        if "inputs" in sim:  # the command of the actuator with the largest peak
+            us = sim["inputs"].values
+            u = us[int(np.argmax(np.max(np.abs(us), axis=1)))]
+        else:
+            u = np.zeros_like(y)
         t = sim["time"].values
         series[name], inputs[name] = y, u
         zeta_cl = fn_cl = float("nan")
@@ -1107,22 +1119,36 @@ def control(study: Study, plant_arrays, fn1_hz: float):
 
 
 def _stability(plant, ctrl, y: np.ndarray, amp0: float) -> dict:
-    """Stability verdict of one loop.
+    """Stability verdict and margins of one loop.
 
     Linear laws (also the small-signal loop of a saturated linear law): the eigenvalues
     of the closed-loop state matrix (:func:`mvtk.control.closed_loop`); the loop is
     stable when every pole has a real part below ``-1e-9 max|p|`` (a pole on the
     imaginary axis is marginal, i.e. not stable). Nonlinear laws: along the simulated
     trajectory, finite and with the peak of the last fifth of the record below the
-    release amplitude.
+    release amplitude. Margins (:func:`mvtk.control.loop_margins`, the loop broken at
+    the actuator input): gain margin (dB), phase margin (deg) and the factor on the loop
+    gain at the edge of stability, for a linear law with one actuator; NaN otherwise
+    (no crossover: NaN too, the critical factor then says whether any gain
+    destabilises the loop).
     """
-    from ..control import closed_loop, closed_loop_modes
+    from ..control import closed_loop, closed_loop_modes, loop_margins
 
+    nan = float("nan")
+    margins = {"gain_margin_db": nan, "phase_margin_deg": nan, "critical_gain_factor": nan}
     if ctrl is None or kind_linear(ctrl):
         if ctrl is None:
             poles = closed_loop_modes(plant).eigenvalues
         else:
-            poles = closed_loop(plant, dataclasses.replace(ctrl, u_max=None)).poles()
+            lin = dataclasses.replace(ctrl, u_max=None)
+            poles = closed_loop(plant, lin).poles()
+            if not isinstance(getattr(lin, "actuator", None), list | tuple) or len(
+                    lin.actuator) == 1:
+                lm = loop_margins(plant, lin)
+                margins = {"gain_margin_db": float(lm.gain_margin_db),
+                           "phase_margin_deg": float(lm.phase_margin_deg),
+                           "critical_gain_factor": float(lm.critical_gain_factor)}
+                margins = {k: (v if np.isfinite(v) else nan) for k, v in margins.items()}
         poles = np.asarray(poles, dtype=complex)
         k = int(np.argmax(poles.real))
         p = poles[k]
@@ -1130,11 +1156,11 @@ def _stability(plant, ctrl, y: np.ndarray, amp0: float) -> dict:
         zeta_min = float(-p.real / abs(p)) if abs(p) > 0 else 0.0
         return {"stable": bool(p.real < -margin), "max_real_pole_1_per_s": float(p.real),
                 "critical_pole_imag_rad_s": float(abs(p.imag)), "zeta_min": zeta_min,
-                "stability_basis": "closed-loop eigenvalues"}
+                **margins, "stability_basis": "closed-loop eigenvalues"}
     tail = y[int(0.8 * len(y)):]
     ok = bool(np.all(np.isfinite(y)) and tail.size and np.max(np.abs(tail)) < abs(amp0))
-    return {"stable": ok, "max_real_pole_1_per_s": float("nan"),
-            "critical_pole_imag_rad_s": float("nan"), "zeta_min": float("nan"),
+    return {"stable": ok, "max_real_pole_1_per_s": nan,
+            "critical_pole_imag_rad_s": nan, "zeta_min": nan, **margins,
             "stability_basis": "simulated trajectory (decays below the release amplitude)"}
 
 

@@ -111,6 +111,11 @@ class FrequencyTarget:
         :func:`targets_from_shapes`).
     kind : str, optional
         Mode type (``"bending"``, ``"torsion"``, ...) checked when pairing by order.
+    std_hz : float, optional
+        Standard deviation of ``fn_hz`` from its identification, Hz (e.g. the
+        ``fn_std_hz`` of :class:`mvtk.modal.IdentifiedModes`). :func:`update` weights
+        the target by ``1 / sigma^2`` with ``sigma^2 = std_hz^2 + (model_form_std
+        fn_hz)^2`` and tells noise from model form in its residual verdicts.
 
     Attributes
     ----------
@@ -136,6 +141,7 @@ class FrequencyTarget:
     label: str | None = None
     shape: Any = None
     kind: str | None = None
+    std_hz: float | None = None
 
     def __post_init__(self) -> None:
         where = f"target {self.label or self.fn_hz!r}"
@@ -151,6 +157,14 @@ class FrequencyTarget:
         ):
             raise ParameterError(f"{where}: weight must be a finite number >= 0, got {w!r}")
         object.__setattr__(self, "weight", float(w))
+        sd = self.std_hz
+        if sd is not None:
+            if isinstance(sd, bool) or not isinstance(
+                    sd, int | float | np.floating | np.integer) or not (
+                    math.isfinite(sd) and sd >= 0):
+                raise ParameterError(
+                    f"{where}: std_hz must be a finite number >= 0 in Hz, got {sd!r}")
+            object.__setattr__(self, "std_hz", float(sd))
         if self.mode is not None:
             if isinstance(self.mode, bool) or int(self.mode) != self.mode or self.mode < 1:
                 raise ParameterError(
@@ -175,10 +189,10 @@ class FrequencyTarget:
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], where: str = "target") -> FrequencyTarget:
-        """Build from a TOML table ``{fn_hz=..., weight=..., mode=..., ...}``."""
+        """Build from a TOML table ``{fn_hz=..., weight=..., mode=..., std_hz=..., ...}``."""
         if not isinstance(d, Mapping):
             raise ConfigError(f"{where}: expected a table with an 'fn_hz' key, got {d!r}")
-        allowed = {"fn_hz", "weight", "mode", "label", "shape", "kind"}
+        allowed = {"fn_hz", "weight", "mode", "label", "shape", "kind", "std_hz"}
         unknown = set(d) - allowed
         if unknown:
             raise ConfigError(
@@ -197,21 +211,34 @@ class FrequencyTarget:
         return targets_from_modal_result(result, **kwargs)
 
 
-def _fn_values(result: Any) -> np.ndarray:
-    if hasattr(result, "columns") and "fn_hz" in getattr(result, "columns", ()):
-        return np.asarray(result["fn_hz"], dtype=float).ravel()
+def _fn_values(result: Any, name: str = "fn_hz") -> np.ndarray:
+    """The ``name`` values (``fn_hz``, or ``fn_std_hz``: None where absent) of a result."""
+    optional = name != "fn_hz"
+    if hasattr(result, "columns") and name in getattr(result, "columns", ()):
+        return np.asarray(result[name], dtype=float).ravel()
+    if hasattr(result, "columns") and optional and "fn_hz" in result.columns:
+        return None
     if isinstance(result, Mapping):
-        if "fn_hz" not in result:
+        if name not in result:
+            if optional:
+                return None
             raise ParameterError(
                 f"modal result mapping has no 'fn_hz' key; keys: {sorted(map(str, result))}"
             )
-        return np.asarray(result["fn_hz"], dtype=float).ravel()
+        return np.asarray(result[name], dtype=float).ravel()
     if hasattr(result, "fn_hz"):
-        return np.asarray(result.fn_hz, dtype=float).ravel()
+        v = getattr(result, name, None)
+        return None if v is None else np.asarray(v, dtype=float).ravel()
     if isinstance(result, Sequence) and not isinstance(result, str):
-        return np.concatenate([_fn_values(r) for r in result]) if result else np.array([])
+        if not result:
+            return np.array([])
+        parts = [_fn_values(r, name) for r in result]
+        if optional:
+            parts = [np.full(_fn_values(r).size, np.nan) if v is None else v
+                     for r, v in zip(result, parts)]
+        return np.concatenate(parts)
     if hasattr(result, "to_dataframe"):
-        return _fn_values(result.to_dataframe())
+        return _fn_values(result.to_dataframe(), name)
     raise ParameterError(
         f"cannot read natural frequencies from a {type(result).__name__}: expected an "
         "object with an 'fn_hz' attribute, a table with an 'fn_hz' column, or a list of them"
@@ -234,6 +261,8 @@ def targets_from_modal_result(
         attribute (scalar or array; e.g. a ``mvtk.damping`` result), a
         ``pandas.DataFrame`` with an ``fn_hz`` column, a mapping with key ``"fn_hz"``,
         an object with ``to_dataframe()``, or a list of any of these (one per mode).
+        Where it also carries ``fn_std_hz`` (:class:`mvtk.modal.IdentifiedModes`, its
+        table), each target gets that standard deviation as ``std_hz`` (none where NaN).
     select : sequence of int, optional
         0-based positions of the frequencies to keep (default all).
     weights, labels : sequence, optional
@@ -252,6 +281,9 @@ def targets_from_modal_result(
     fn = _fn_values(result)
     if fn.size == 0:
         raise ParameterError("modal result contains no natural frequency (fn_hz is empty)")
+    std = _fn_values(result, "fn_std_hz")
+    if std is None or std.size != fn.size:
+        std = np.full(fn.size, np.nan)
     if select is not None:
         idx = list(select)
         bad = [i for i in idx if not -fn.size <= i < fn.size]
@@ -259,7 +291,7 @@ def targets_from_modal_result(
             raise ParameterError(
                 f"select positions {bad} out of range for {fn.size} identified frequencies"
             )
-        fn = fn[idx]
+        fn, std = fn[idx], std[idx]
     for name, seq in (("weights", weights), ("labels", labels)):
         if seq is not None and len(seq) != fn.size:
             raise DimensionError(f"expected {fn.size} {name}, got {len(seq)}")
@@ -268,6 +300,7 @@ def targets_from_modal_result(
             float(f),
             weight=1.0 if weights is None else float(weights[i]),
             label=None if labels is None else labels[i],
+            std_hz=float(std[i]) if np.isfinite(std[i]) else None,
         )
         for i, f in enumerate(fn)
     ]
@@ -295,7 +328,8 @@ def targets_from_shapes(
         Per-mode identification quality (the ``mvtk.modal`` table), indexed by mode or
         with a ``mode`` column; ``mpc`` (0..1) and ``reliable`` (bool) are used: the
         weight of a target is its ``mpc`` (1 when absent or NaN), 0 when not
-        ``reliable`` or when ``mpc < min_mpc``.
+        ``reliable`` or when ``mpc < min_mpc``; ``fn_std_hz`` (when present and finite)
+        becomes the target's ``std_hz``.
     min_mpc : float
     labels : sequence of str, optional
 
@@ -342,6 +376,7 @@ def targets_from_shapes(
         vals = np.array([np.real(v * np.exp(-0.5j * np.angle(np.sum(v * v)))) for v in vals])
     modes = shapes["mode"].values
     w = np.ones(len(modes))
+    std = np.full(len(modes), np.nan)
     if quality is not None:
         q = quality.set_index("mode") if "mode" in getattr(quality, "columns", ()) else quality
         for k, m in enumerate(modes):
@@ -353,6 +388,8 @@ def targets_from_shapes(
                 w[k] = float(row["mpc"]) if float(row["mpc"]) >= min_mpc else 0.0
             if "reliable" in q.columns and not bool(row["reliable"]):
                 w[k] = 0.0
+            if "fn_std_hz" in q.columns:
+                std[k] = float(row["fn_std_hz"])
     if labels is not None and len(labels) != len(modes):
         raise DimensionError(f"expected {len(modes)} labels, got {len(labels)}")
     dof_labels = [str(d) for d in shapes["dof"].values]
@@ -361,6 +398,7 @@ def targets_from_shapes(
             float(shapes["fn_hz"].values[k]), weight=float(w[k]),
             label=labels[k] if labels is not None else f"mode {modes[k]}",
             shape={"values": vals[k], "observation": C, "labels": dof_labels},
+            std_hz=float(std[k]) if np.isfinite(std[k]) else None,
         )
         for k in range(len(modes))
     ]

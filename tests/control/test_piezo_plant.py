@@ -58,7 +58,10 @@ def test_dc_gains_of_charge_and_voltage_sensing_match_the_full_model(panel):
 
 def test_ppf_from_the_collocated_charge_sensor_is_stable_on_the_full_model(panel):
     m, cp, se = panel
-    design = piezo_plant(se, cp, "act", "sen", form="modal", n_modes=8, modal_damping=0.01)
+    # the design plant keeps the modes to 483 Hz (12), the one above the target mode
+    # (335 Hz) included: as a static residual its amplification there (1.9) is lost and
+    # the added damping predicted 20 % high (11 % with it)
+    design = piezo_plant(se, cp, "act", "sen", form="modal", n_modes=12, modal_damping=0.01)
     full = piezo_plant(m, cp, "act", "sen", form="modal", n_modes=30, modal_damping=0.01)
     # the patches' strongest mode (k^2 = 0.002, 335 Hz)
     f5 = design.meta["fn_hz"][4]
@@ -94,5 +97,50 @@ def test_mimo_lqr_over_two_patches(panel):
     assert LQR(R=1e-6, actuator=["act", "sen"]).gain_matrix(plant).shape == (2, 12)
     assert np.allclose(LQR(R=1e-6, actuator=["act"]).gain_matrix(plant),
                        LQR(R=1e-6, actuator="act").gain_matrix(plant))
-    with pytest.raises(ParameterError, match="use gain_matrix"):
-        LQR(actuator=["act", "sen"]).realize(plant)
+
+
+
+def test_mimo_lqr_over_two_patches_is_simulated(panel):
+    """The two-input LQR loop runs in simulate (exact ZOH march) and closed_loop: the
+    states equal expm((A - B K) t) x0 computed here, each patch's command is -K x, the
+    closed-loop poles are the Riccati design's; with an actuator limit the integrator
+    clips both commands, and a limit far above the commands gives the linear loop."""
+    import scipy.linalg
+
+    from mvtk.control import LQR, closed_loop, release_state, simulate
+
+    m, cp, se = panel
+    plant = piezo_plant(se, cp, ["act", "sen"], "sen", form="modal", n_modes=6,
+                        modal_damping=0.01)
+    lqr = LQR(R=1e-6, actuator=["act", "sen"])
+    x0 = release_state(plant, 5, "Q:sen", 1e-9)
+    sim = simulate(plant, lqr, t_end=0.02, fs_out=20000.0, initial=x0)
+    assert list(sim["input"].values) == ["act", "sen"]
+    ss = plant.to_state_space()
+    Kg = lqr.gain_matrix(plant)
+    Acl = ss.A - ss.B @ Kg
+    t = sim["time"].values
+    for i in (1, 57, len(t) - 1):
+        x = scipy.linalg.expm(Acl * t[i]) @ x0
+        assert np.allclose(sim["states"].values[:, i], x, rtol=0, atol=1e-8 * np.abs(x0).max())
+        assert np.allclose(sim["inputs"].values[:, i], -Kg @ x,
+                           atol=1e-8 * np.abs(Kg @ x0).max())
+    cl = closed_loop(plant, lqr)
+    assert cl.outputs[-2:] == ("u(act)", "u(sen)")
+    assert np.allclose(np.sort_complex(np.linalg.eigvals(cl.A)),
+                       np.sort_complex(lqr.closed_loop_poles(plant)), rtol=1e-9)
+    u_peak = np.abs(sim["inputs"].values).max(axis=1)
+    lim = 0.5 * u_peak.min()
+    sat = simulate(plant, LQR(R=1e-6, actuator=["act", "sen"], u_max=lim), t_end=0.02,
+                   fs_out=20000.0, initial=x0)
+    assert sat.attrs["method"] == "LSODA"
+    assert np.abs(sat["inputs"].values).max() <= lim * (1 + 1e-12)
+    assert np.all(np.abs(sat["inputs"].values).max(axis=1) == pytest.approx(lim))
+    big = simulate(plant, LQR(R=1e-6, actuator=["act", "sen"], u_max=10 * u_peak.max()),
+                   t_end=0.02, fs_out=20000.0, initial=x0, rtol=1e-9)
+    assert np.allclose(big["outputs"].values, sim["outputs"].values, rtol=0,
+                       atol=1e-5 * np.abs(sim["outputs"].values).max())
+    from mvtk.control import loop_margins
+
+    with pytest.raises(ParameterError, match="drives 2 inputs"):
+        loop_margins(plant, lqr)

@@ -183,9 +183,29 @@ def test_rotating_the_whole_model_leaves_the_electromechanics_unchanged(tmp_path
     G0 = c0.B.T @ static_solve(m0, c0.B)
     G1 = c1.B.T @ static_solve(m1, c1.B)
     assert np.max(np.abs(G1 - G0)) <= 1e-8 * np.max(np.abs(G0))
-    f0 = [r["f_oc_hz"] for r in modal_emcc(m0, c0, 4)]
-    f1 = [r["f_oc_hz"] for r in modal_emcc(m1, c1, 4)]
-    assert np.allclose(f1, f0, rtol=1e-8)
+    r0, r1 = modal_emcc(m0, c0, 4), modal_emcc(m1, c1, 4)
+    for key in ("f_sc_hz", "f_oc_hz", "k2", "k2_modal"):
+        assert np.allclose([r[key] for r in r1], [r[key] for r in r0], rtol=1e-8), key
+    # the charge FRFs (feed-through included) of the full model at the first mode's
+    # flank and between modes 4 and 5, and of the super element with the electrodes'
+    # shapes retained at the (rotated) centre point
+    from mvtk.fe import factorize
+    from mvtk.reduction import craig_bampton, with_electrodes
+
+    def frf(m, c, f):
+        A = (m.K * (1 + 0.02j) - (2 * np.pi * f) ** 2 * m.M).tocsc()
+        return c.B.T @ factorize(A, backend="superlu").solve(c.B) + np.diag(c.C)
+
+    def se_frf(m, c, f):
+        se, Br = with_electrodes(craig_bampton(m, ["centre"], f_cut_hz=600.0), c)
+        return Br.T @ np.linalg.solve(se.K * (1 + 0.02j) - (2 * np.pi * f) ** 2 * se.M,
+                                      Br) + np.diag(c.C)
+
+    for f in (1.01 * r0[0]["f_sc_hz"], 300.0):
+        H0, H1 = frf(m0, c0, f), frf(m1, c1, f)
+        assert np.max(np.abs(H1 - H0)) <= 1e-8 * np.max(np.abs(H0))
+    H0, H1 = se_frf(m0, c0, 300.0), se_frf(m1, c1, 300.0)
+    assert np.max(np.abs(H1 - H0)) <= 1e-8 * np.max(np.abs(H0))
 
 
 @pytest.mark.parametrize("change, key", [

@@ -115,3 +115,35 @@ def test_exponential_window_damping_is_removed(msys):
     # the same FRFs without the attribute report the windowed damping
     raw = modal.identify(h.assign_attrs(exponential_window_tau_s=None), 10, 240)
     np.testing.assert_allclose(raw.zeta[msys.match(raw.fn_hz, fn)], sig_w / wn_w, rtol=1e-3)
+
+
+@pytest.mark.slow
+def test_std_on_zero_padded_lines_matches_monte_carlo():
+    """An impulse response recorded for 0.5 s (both modes decayed to < 0.1 %), FRF on
+    lines zero-padded 8 x: the lines interpolate 256 independent ones, so the fit's
+    ``(J^T J)^-1`` counts each piece of information 8 times. With the ``nfft /
+    nperseg`` factor the predicted zeta std is within 35 % of the scatter of 60
+    repetitions (found 1.00 and 1.26; without the factor 0.35 and 0.45)."""
+    import xarray as xr
+
+    fs, n, pad = 1024.0, 512, 8
+    t = np.arange(n) / fs
+    fn, z = np.array([50.0, 120.0]), np.array([0.06, 0.03])
+    wn = 2 * np.pi * fn
+    wd = wn * np.sqrt(1 - z**2)
+    y0 = sum(np.exp(-z[i] * wn[i] * t) * np.sin(wd[i] * t) / wd[i] for i in range(2))
+    f = np.fft.rfftfreq(n * pad, 1 / fs)
+    rng = np.random.default_rng(3)
+    Z, SZ = [], []
+    for _ in range(60):
+        y = y0 + 2e-3 * np.abs(y0).max() * rng.standard_normal(n)
+        h = xr.DataArray(np.fft.rfft(y, n * pad)[None, None] / fs,
+                         dims=("response", "reference", "frequency"),
+                         coords={"response": ["1+z"], "reference": ["1+z"], "frequency": f},
+                         attrs={"frf_type": "receptance", "nperseg": n, "nfft": n * pad})
+        r = modal.identify(h, 20, 200, fn_hz=[50, 120], refine=True)
+        Z.append(r.zeta)
+        SZ.append(r.zeta_std)
+    ratio = np.std(Z, axis=0) / np.median(SZ, axis=0)
+    assert np.all(np.abs(ratio - 1) < 0.35), ratio
+    assert np.all(np.abs(np.mean(Z, axis=0) / z - 1) < 0.01)

@@ -91,7 +91,7 @@ def test_double_hit_and_clipped_hit_are_named_and_tabulated(campaign):
     k = [int(np.argmin(np.abs(tab["fn_hz"].values - f))) for f in RH.FN[:4]]
     fn, zeta = _corrected(tab["fn_hz"].values[k], tab["zeta"].values[k], tau)
     np.testing.assert_allclose(fn, RH.FN[:4], rtol=1e-3)
-    np.testing.assert_allclose(zeta, RH.ZETA[:4], rtol=0.10)  # found: +6.1 % on mode 1
+    np.testing.assert_allclose(zeta, RH.ZETA[:4], rtol=0.10)  # found: -0.3 % on mode 1
 
 
 @pytest.mark.slow
@@ -140,3 +140,53 @@ def test_cli_on_the_double_hit_file_alone_is_a_named_refusal(campaign, capsys):
     assert "hit_node10.csv: every impact record holds a double hit (second pulse at " \
            "0.02222 s, 40% of the hit at 0.01025 s)" in err
     assert "frequency lines" not in err and "Traceback" not in err
+
+
+@pytest.fixture(scope="module")
+def campaign11(tmp_path_factory):
+    """A fresh campaign (rng seed 11) the defaults were not tuned on."""
+    return RH.write(tmp_path_factory.mktemp("roving11"), np.random.default_rng(11))
+
+
+def test_defaults_give_every_mode_within_10_percent_and_no_fault_pole(campaign11, capsys):
+    """`mvtk modal` with defaults on the 32 files: mode 1 ends its 0.3 s record at ~5 % of
+    its windowed amplitude, 80 % of its identified damping is the window's. On the
+    record's own lines (no zero padding) the windowed mode is exactly a pole with
+    damping ``sigma + 1 / tau`` and the refined damping is right; the clipped set's
+    FRF holds a pole of its own (a zero of the clipped force's spectrum, 888 Hz)
+    that no other FRF needs: not reliable, the set named."""
+    from mvtk.cli import main
+
+    assert main(["modal", *map(str, campaign11), "--json"]) == 0
+    modes = json.loads(capsys.readouterr().out)["modes"]
+    fn = np.array([m["fn_hz"] for m in modes])
+    k = [int(np.argmin(np.abs(fn - f))) for f in RH.FN]
+    for f0, z0, i in zip(RH.FN, RH.ZETA, k):
+        m = modes[i]
+        assert m["fn_hz"] == pytest.approx(f0, rel=1e-3)
+        # found: -0.2 % on mode 1 (+16 % before, marked reliable with zeta_std 1e-4)
+        assert m["zeta"] == pytest.approx(z0, rel=0.10), m
+        assert abs(m["zeta"] - z0) < 4 * m["zeta_std"] + 1e-3 * z0, m   # the error bar covers it
+        assert m["reliable"], m
+    k1 = modes[k[0]]
+    assert k1["zeta_window"] > 0.75 * (k1["zeta"] + k1["zeta_window"])   # window-dominated
+    extra = [m for i, m in enumerate(modes) if i not in k]
+    assert extra, "the clipped set's pole is no longer found: the test lost its point"
+    for m in extra:
+        assert not m["reliable"], m
+        assert "needed only by FRFs of flagged sets" in m["reason"]
+        assert "set 20: clipped" in m["reason"]
+
+
+def test_zero_padded_windowed_lines_are_not_trusted(campaign11):
+    """The same test on zero-padded lines (nfft given): mode 1's truncation ripple
+    biases its damping (+30 %); the row says so instead of a confident number."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        h = modal.reciprocal(modal.frf_matrix([io.read(p) for p in campaign11],
+                                              {"quantity": "force"}, nfft=8192))
+    assert h.attrs["nfft"] == 8192 and h.attrs["nperseg"] < 8192 / 4
+    t = modal.identify(h, 10.0, 800.0).to_dataframe()
+    m1 = t.iloc[int(np.argmin(np.abs(t["fn_hz"].values - RH.FN[0])))]
+    assert abs(m1["zeta"] / RH.ZETA[0] - 1) > 0.10      # the bias is real ...
+    assert not m1["reliable"] and "zero-padded lines" in m1["reason"]   # ... and stated

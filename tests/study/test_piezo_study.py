@@ -19,6 +19,10 @@ def test_curved_panel_study_damps_the_patch_mode(tmp_path):
     res = run(STUDY, tmp_path, use_cache=False, progress=False, parallel=False)
     act = res.results["reduction"]["actuator"]
     assert act["piezo"] and act["name"] == "act" and act["sensors"] == ["sen"]
+    # both patches are plant inputs (control.actuators)
+    assert act["actuators"] == ["act", "sen"]
+    plant = res.arrays["reduction"]
+    assert list(plant["input"].values) == ["act", "sen"]
     # the plant's DC gain from the SE equals the full model's (electrodes' static shapes)
     assert act["tip_per_volt_plant_m"] == pytest.approx(act["tip_per_volt_full_m"], rel=1e-6)
     rows = {r["controller"]: r for r in res.results["control"]["metrics"]}
@@ -28,6 +32,18 @@ def test_curved_panel_study_damps_the_patch_mode(tmp_path):
     assert ppf["zeta_mode1"] > 2 * open_["zeta_mode1"]
     assert srf["zeta_mode1"] > open_["zeta_mode1"]
     assert ppf["voltage_within_limit"] and ppf["settling_time_s"] < open_["settling_time_s"]
+    # PPF from the collocated charge sensor: stable for 0 <= G < 1 (Fanson & Caughey
+    # 1990), so the loop gain G = 0.5 may double before instability (measured 2.000)
+    assert ppf["critical_gain_factor"] == pytest.approx(1 / 0.5, rel=0.02)
+    assert srf["critical_gain_factor"] > 1 and ppf["gain_margin_db"] > 0
+    # the LQR on both patches (full state): stable, damps the released mode, within
+    # the actuator limit; no single-loop margins for a two-input law
+    lqr = rows["LQR (2 patches)"]
+    assert lqr["stable"] and lqr["zeta_mode1"] > 2 * open_["zeta_mode1"]
+    assert lqr["voltage_within_limit"] and lqr["settling_time_s"] < open_["settling_time_s"]
+    assert pd.isna(lqr["gain_margin_db"])
+    html = (tmp_path / "index.html").read_text(encoding="utf-8")
+    assert "gain margin [dB]" in html and "LQR (2 patches)" in html
     em = pd.read_csv(tmp_path / "tables" / "piezo_emcc.csv")
     assert set(em["electrode"]) == {"act", "sen"} and (em["f_oc_hz"] >= em["f_sc_hz"]).all()
 
@@ -63,3 +79,40 @@ def test_init_template_of_a_mesh_offers_piezo_patches(tmp_path):
     (tmp_path / "structure.toml").write_text("\n".join(lines))
     cp = piezo_coupling(build_model(tmp_path / "structure.toml"))
     assert cp.names == ("pzt",) and cp.C[0] > 0
+
+
+class _Study:
+    def __init__(self, control):
+        self._c = control
+
+    def section(self, name):
+        return self._c if name == "control" else None
+
+
+@pytest.mark.parametrize("ctrl, key", [
+    ({"name": "P", "type": "PPF", "f_hz": 10.0, "zeta_f": 0.1, "gain": 0.5,
+      "sensor": "Q:nope"}, "control.controllers['P'].sensor"),
+    ({"name": "P", "type": "PPF", "f_hz": 10.0, "zeta_f": 0.1, "gain": 0.5,
+      "actuator": "b"}, "control.controllers['P'].actuator"),
+    ({"name": "L", "type": "LQR", "R": 1.0, "actuators": ["a", "b"]},
+     "control.controllers['L'].actuators"),
+])
+def test_controller_inputs_and_outputs_are_checked_against_the_plant(ctrl, key):
+    """A controller naming an actuator or sensor the plant does not have: one-line
+    error naming the key and the plant's names."""
+    import numpy as np
+
+    from mvtk.control import StructuralPlant
+    from mvtk.study._stages import _plant_dataset, control
+
+    K, M = np.diag([4e3, 9e4]), np.eye(2)
+    plant = StructuralPlant(M, 0.01 * K / 30, K, np.array([[1.0], [0.5]]),
+                            np.array([[1.0, 0.2], [1.0, 1.0]]), np.zeros((2, 2)),
+                            inputs=["a"], outputs=["Q:sen", "tip"], coords=["m1", "m2"],
+                            input_units=["V"], output_units=["C", "m"])
+    ds = _plant_dataset(plant, {"moment_per_volt": float("nan"), "output_units": "C|m"})
+    cfg = {"initial_tip_displacement_m": 1e-4, "t_end_s": 1.5, "fs_out": 500.0,
+           "settle_band": 0.05, "controllers": [ctrl]}
+    with pytest.raises(ConfigError) as err:
+        control(_Study(cfg), ds, 10.0)
+    assert key in str(err.value) and "\n" not in str(err.value)

@@ -85,6 +85,21 @@ def test_table_values_against_references(out_dir):
     assert ctl.loc["PPF", "zeta_mode1"] == pytest.approx(0.1 / 1.2 + 5.84e-4, rel=0.35)
 
 
+def test_updating_residuals_weighted_by_identified_std_with_verdicts(out_dir):
+    """The targets carry the fn_std_hz of the scan's identified modes (1e-5 .. 1e-4 Hz)
+    plus the 0.5 % model-form term; the specimen's residuals (0.1-0.5 %, its unmodelled
+    sensor mass, sheet and clamp) are far beyond identification noise and within the
+    model-form term (data/smart_beam/README.md)."""
+    res = _table(out_dir, "updating_residuals").set_index("target")
+    assert list(res["std from"]) == [f"test mode {k}" for k in (1, 2, 3, 4)]
+    assert (res["identification_std_hz"] < 1e-3).all()
+    assert res["std_hz"].to_numpy() == pytest.approx(
+        (res["identification_std_hz"] ** 2 + (0.005 * res["target_hz"]) ** 2) ** 0.5)
+    assert (res["residual_hz"].abs() > res["noise_limit_hz"]).all()
+    assert (res["residual_hz"].abs() <= res["model_form_limit_hz"]).all()
+    assert (res["verdict"] == "model-form term").all()
+
+
 def test_multi_point_test_identified_and_correlated(out_dir):
     """Issues 13 and 15: the scanning-laser test through mvtk.modal and mvtk.correlation.
 

@@ -271,3 +271,35 @@ def test_init_reader_options_go_to_the_files_that_take_them(tmp_path, capsys):
     res = init_study(tmp_path / "t", structure=STRUCTURE, measurements=[src],
                      read_options={"units": ["m"]})
     assert res.tests[0]["kind"] == "skipped" and "units" in res.tests[0]["why"]
+
+
+def test_a_second_multipoint_file_is_a_multipoint_measurement(tmp_path):
+    """Two FRF files of one multi-point test (the scan and a copy of it): the first is
+    [modal], the second a multi-point measurement identified on its own; the same data
+    give the same modes, each paired with itself (df 0, MAC 1)."""
+    import shutil
+
+    import numpy as np
+
+    from mvtk.study import run, study_checks
+
+    (tmp_path / "day2").mkdir()
+    scan = DATA / "SYNTHETIC_smart_beam_scan.uff"
+    copy = tmp_path / "day2" / scan.name
+    shutil.copy(scan, copy)
+    res = init_study(tmp_path / "s", structure=STRUCTURE, measurements=[scan, copy],
+                     geometry=DATA / "SYNTHETIC_smart_beam_scan_geometry.csv")
+    cfg = load_study(res.study).config
+    mp = cfg["measurements"]["multipoint_2"]
+    assert mp["kind"] == "multi-point" and mp["file"].endswith("day2/" + scan.name)
+    out = run(res.study, tmp_path / "out", stages=["modal"], progress=False, report=False)
+    assert not out.failed, out.failed
+    mod = out.results["modal"]
+    t = mod["tests"]["multipoint_2"]
+    assert t["table"]["fn_hz"] == mod["table"]["fn_hz"]
+    c = t["comparison"]
+    n = len(mod["table"]["fn_hz"])
+    assert c["paired_mode"] == list(range(1, n + 1)) and np.allclose(c["df_pct"], 0.0)
+    assert np.allclose(c["mac"], 1.0, atol=1e-12)
+    checks = [k for k in study_checks(out) if "multi-point test multipoint_2" in k.name]
+    assert checks and all(k.passed for k in checks)

@@ -156,3 +156,33 @@ def test_missing_geometry_of_csv_sets_is_a_clear_refusal(tmp_path):
     with pytest.raises(ConfigError, match=r"modal\.geometry: not given, and hit_node1\.csv "
                        r"holds no test geometry .*expected geometry = "):
         geometry_of(_Study(), {"shapes": shapes})
+
+
+def test_multipoint_measurement_keys_are_checked(tmp_path):
+    for name in ("a.csv", "geometry.csv"):
+        (tmp_path / name).write_text("x\n", encoding="utf-8")
+    mp = '[measurements.day2]\nkind = "multi-point"\n'
+    p = _study(tmp_path, ["a.csv"], mp + 'sets = ["missing.csv"]\n')
+    with pytest.raises(ConfigError, match=r"measurements\.day2\.sets\[0\]: 'missing\.csv' "
+                       "not found"):
+        load_study(p)
+    p = _study(tmp_path, ["a.csv"], mp + 'sets = ["a.csv"]\nfmin_hz = 200.0\n')
+    with pytest.raises(ConfigError, match=r"measurements\.day2: expected fmin_hz < fmax_hz, "
+                       r"got 200\.0 and 120\.0 Hz"):
+        load_study(p)
+    p = _study(tmp_path, ["a.csv"], mp + 'sets = ["a.csv"]\nfile = "a.csv"\n')
+    with pytest.raises(ConfigError, match=r"measurements\.day2\]: give exactly one of"):
+        load_study(p)
+    p = _study(tmp_path, ["a.csv"], mp.replace("day2", "decay") + 'sets = ["a.csv"]\n')
+    with pytest.raises(ConfigError, match="a multi-point test needs a name of its own"):
+        load_study(p)
+    q = tmp_path / "no_modal.toml"
+    q.write_text(f'[structure]\nfile = "{STRUCTURE.as_posix()}"\n' + mp
+                 + 'sets = ["a.csv"]\nfmin_hz = 1.0\nfmax_hz = 2.0\n', encoding="utf-8")
+    with pytest.raises(ConfigError, match=r"measurements\.day2: a multi-point measurement "
+                       r"needs a \[modal\] section"):
+        load_study(q)
+    study = load_study(_study(tmp_path, ["a.csv"], mp + 'sets = ["a.csv", "a.csv"]\n'))
+    assert "day2" not in study.measurement_files      # not a single-record test
+    assert [k for k in study.extra_files if "day2" in k] == [
+        "multipoint[day2].set_1", "multipoint[day2].set_2"]

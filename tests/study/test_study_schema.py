@@ -154,4 +154,5 @@ def test_schema_is_plain_introspectable_data():
             if key.endswith("_hz") and k.type in ("number", "numbers"):
                 assert k.units == "Hz", (name, key)
     assert d["updating"]["one_of"] == [["targets_hz", "targets"]]
-    assert set(CONTROLLER_SCHEMAS) == {"PPF", "SRF", "LyapunovBangBang", "VelocityFeedback"}
+    assert set(CONTROLLER_SCHEMAS) == {"PPF", "SRF", "LyapunovBangBang", "VelocityFeedback",
+                                       "LQR"}

@@ -254,3 +254,29 @@ def test_shell_twin_patch_position_and_modulus():
     np.testing.assert_allclose(r.values, [0.008, 2.15e11], rtol=5e-3)
     # matrix sensitivities throughout (one-sided where a step changed the mesh)
     assert r.meta["fd_eigen_parameters"] == []
+
+
+def test_update_arguments_is_the_stage_reading_pairing_and_std(tmp_path):
+    """update_arguments reads [updating] as the study's updating stage does: a target
+    without a mode is paired with its nominal FE mode by frequency (a missed mode does not
+    shift the others), a stated std_hz is kept, model_form_std is handed to update."""
+    f = model_fn(NOMINAL, n=4)[0]
+    table = _updating_table(model_form_std=0.002)
+    # the test missed mode 2: targets are modes 1, 3, 4 of the truth
+    table["targets"] = [{"fn_hz": float(f[0]), "std_hz": 0.01},
+                        {"fn_hz": float(f[2])}, {"fn_hz": float(f[3]), "std_hz": 0.05}]
+    path = tmp_path / "study.toml"
+    path.write_text(tomli_w.dumps({**_start(), "updating": table}))
+    kw = load_study(path)
+    assert [t.mode for t in kw["targets"]] == [1, 3, 4]
+    assert [t.std_hz for t in kw["targets"]] == [0.01, None, 0.05]
+    assert kw["model_form_std"] == 0.002 and kw["max_iter"] == 30
+    kw.pop("structure_path")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = update(**kw)
+    assert r.values[0] == pytest.approx(2.1e11, rel=1e-4)
+    tab = r.residual_table()
+    np.testing.assert_allclose(tab["std_hz"], np.hypot(np.nan_to_num(tab["id_std_hz"]),
+                                                       0.002 * tab["target_hz"]))
+    assert list(tab["mode"]) == [1, 3, 4]
