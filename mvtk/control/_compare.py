@@ -46,6 +46,14 @@ class Scenario:
         Settling band as a fraction of the initial amplitude.
     method : str
         Simulation method for nonlinear laws (see :func:`simulate`).
+
+    Examples
+    --------
+    Release from 1 mm at ``tip``, 4 s at 200 Hz (see :func:`compare_controllers`):
+
+    >>> sc = Scenario(output="tip", t_end=4.0, fs_out=200.0, amplitude=1e-3)
+    >>> sc.release_mode, sc.amplitude
+    (1, 0.001)
     """
 
     output: str
@@ -74,6 +82,19 @@ class ComparisonResult:
     ``min_closed_loop_zeta``, ``gain_margin_db``, ``phase_margin_deg``,
     ``critical_gain_factor``, ``critical_gain``, ``stability_source``,
     ``stability_reason``. The open-loop row carries the plant's own verdict (no margins).
+
+    Examples
+    --------
+    Returned by :func:`compare_controllers`; ``to_dataframe`` gives one row per
+    controller:
+
+    >>> from mvtk.control import Scenario, VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> res = compare_controllers(plant, {"VF": VelocityFeedback(gain=1e-3)},
+    ...                           Scenario(output="tip", t_end=4.0, fs_out=200.0))
+    >>> res.to_dataframe().index.tolist(), sorted(res.simulations)
+    (['open loop', 'VF'], ['VF', 'open loop'])
     """
 
     rows: tuple[dict, ...]
@@ -115,6 +136,19 @@ def compare_controllers(
     scenario : Scenario
     methods : mapping name -> str, optional
         Simulation method per controller (default ``scenario.method``).
+
+    Examples
+    --------
+    Open loop versus velocity feedback on a 1 mm release (damping 0.01 and
+    0.01 + G w / 2 = 0.0414):
+
+    >>> from mvtk.control import Scenario, VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> res = compare_controllers(plant, {"velocity": VelocityFeedback(gain=1e-3)},
+    ...                           Scenario(output="tip", t_end=4.0, fs_out=200.0))
+    >>> [(r["controller"], round(r["zeta1"], 4)) for r in res.rows]
+    [('open loop', 0.01), ('velocity', 0.0414)]
     """
     methods = dict(methods or {})
     if not isinstance(scenario, Scenario):
@@ -195,6 +229,11 @@ def controller_from_dict(spec: Mapping, switching_peak: float | None = None):
     or ``boundary_layer_rel`` (times ``switching_peak``, the largest ``|B'q'|`` of the
     open loop). ``name`` and ``method`` (the simulation method, read by
     :func:`run_control_section`) are ignored here. Other keys go to the controller.
+
+    Examples
+    --------
+    >>> controller_from_dict({"type": "PPF", "f_hz": 10.0, "zeta_f": 0.1, "gain": 0.5}).targets
+    ((10.0, 0.1, 0.5),)
     """
     if not isinstance(spec, Mapping) or "type" not in spec:
         raise ConfigError(
@@ -262,6 +301,21 @@ def run_control_section(plant, section: Mapping) -> ComparisonResult:
         method = "auto"                     # optional per controller, see simulate()
 
     ``controllers`` may also be a table of tables keyed by name.
+
+    Examples
+    --------
+    The ``[control]`` table of a study as a mapping; velocity feedback adds
+    ``G w / 2`` = 0.0314 to the 1 % of the mode:
+
+    >>> from mvtk.control import modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> res = run_control_section(plant, {
+    ...     "sensor_node": "tip", "initial_tip_displacement_m": 1e-3, "t_end_s": 4.0,
+    ...     "fs_out": 200.0,
+    ...     "controllers": [{"name": "VF", "type": "VelocityFeedback", "gain": 1e-3}]})
+    >>> [(r["controller"], round(r["zeta1"], 4)) for r in res.rows]
+    [('open loop', 0.01), ('VF', 0.0414)]
     """
     if not isinstance(section, Mapping):
         raise ConfigError(f"[control] must be a table, got {type(section).__name__}")

@@ -67,6 +67,19 @@ def modal_plant(
         Modal input matrix (modal force per unit input).
     Cq, Cv : ndarray, shape (n_outputs, n_modes)
         Output matrices on modal displacement and velocity (``Cv`` zeros if omitted).
+
+    Examples
+    --------
+    One mass-normalised mode at 10 Hz with 1 % damping, force in, displacement out:
+
+    >>> from mvtk.control import closed_loop_modes
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> plant.inputs, plant.outputs
+    (('force',), ('tip',))
+    >>> m = closed_loop_modes(plant)
+    >>> m.fn_hz, np.round(m.zeta, 6)
+    (array([10.]), array([0.01]))
     """
     fn = np.atleast_1d(np.asarray(fn_hz, dtype=float))
     n = fn.size
@@ -159,6 +172,16 @@ def cantilever_modal_plant(
     -----
     Modes are mass-normalised analytically (the integral of phi^2 over L equals L for the
     classical cantilever shape). Mode n has ``w_n = w_1 (beta_n L / beta_1 L)^2``.
+
+    Examples
+    --------
+    Euler-Bernoulli cantilever modes: ``f_k / f_1 = (lambda_k / lambda_1)**2`` = 6.267,
+    17.547 for f1 = 13.26 Hz:
+
+    >>> from mvtk.control import closed_loop_modes
+    >>> plant = cantilever_modal_plant(3)
+    >>> np.round(closed_loop_modes(plant).fn_hz, 1), plant.inputs
+    (array([ 13.3,  83.1, 232.7]), ('patch',))
     """
     L = float(length)
     if L <= 0 or mass_per_length <= 0 or f1_hz <= 0:

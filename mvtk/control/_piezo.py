@@ -67,6 +67,30 @@ def piezo_plant(se_or_model: SuperElement | FEModel, coupling: PiezoCoupling,
     Returns
     -------
     StructuralPlant
+
+    Examples
+    --------
+    Voltage in, charge out on the same electrode (a self-sensing actuator), 3 modes with
+    1 % damping; the first is the plate's first bending mode (short circuit):
+
+    >>> from mvtk.fe import (IsotropicMaterial, Laminate, Patch, PiezoMaterial, Ply,
+    ...                      ShellPiezoPatch, assemble_shell_model, edge_dofs,
+    ...                      rectangular_plate_mesh)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10, eps33=2.1e-8)
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4,
+    ...                               patches=[Patch("act", 0.05, 0.15, 0.05, 0.15)])
+    >>> base = Laminate((Ply(steel, 1e-3),))
+    >>> stack = Laminate((Ply(steel, 1e-3), Ply(pzt, 2e-4)), z_bottom=-0.5e-3)
+    >>> model = assemble_shell_model(mesh.nodes, mesh.elements, mesh.element_region,
+    ...                              [base, stack], fixed_dofs=edge_dofs(mesh, "x0", "clamped"))
+    >>> patch = ShellPiezoPatch("act", mesh.elements[mesh.element_region == 1], stack)
+    >>> from mvtk.control import closed_loop_modes
+    >>> from mvtk.fe import piezo_coupling
+    >>> plant = piezo_plant(model, piezo_coupling(model, [patch]), "act", "act", form="modal",
+    ...                     n_modes=3, modal_damping=0.01)
+    >>> plant.inputs, plant.outputs, round(float(closed_loop_modes(plant).fn_hz[0]), 2)
+    (('act',), ('Q:act',), 9.81)
     """
     if sensing not in ("charge", "voltage"):
         raise ParameterError(f"piezo_plant: sensing must be 'charge' or 'voltage', "

@@ -33,6 +33,19 @@ class SecondOrderSystem:
     inputs, outputs, coords : sequence of str, optional
         Names of inputs, outputs and generalised coordinates.
     input_units, output_units : sequence of str, optional
+
+    Examples
+    --------
+    One degree of freedom, 1 kg, 10 Hz, 1 %:
+
+    >>> from mvtk.control import closed_loop_modes
+    >>> w = 2 * np.pi * 10.0
+    >>> sys = SecondOrderSystem(np.eye(1), np.array([[2 * 0.01 * w]]), np.array([[w**2]]),
+    ...                         B=np.array([[1.0]]), Cq=np.array([[1.0]]), Cv=np.zeros((1, 1)),
+    ...                         inputs=["force"], outputs=["x"])
+    >>> m = closed_loop_modes(sys)
+    >>> m.fn_hz, np.round(m.zeta, 6)
+    (array([10.]), array([0.01]))
     """
 
     M: np.ndarray

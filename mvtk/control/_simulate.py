@@ -59,6 +59,18 @@ def closed_loop(plant, controller, design_plant=None) -> StateSpace:
     controller : PPF, SRF, VelocityFeedback or LQR (unsaturated)
     design_plant : optional
         Plant used for the gain normalisation / design (spillover studies).
+
+    Examples
+    --------
+    The closed loop of a velocity feedback as a state-space model: outputs are the plant
+    outputs and the actuator command:
+
+    >>> from mvtk.control import VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> cl = closed_loop(plant, VelocityFeedback(gain=1e-3))
+    >>> cl.outputs, cl.A.shape
+    (('tip', 'u(force)'), (2, 2))
     """
     ss = plant_state_space(plant)
     law = realize(controller, plant, design_plant)
@@ -93,6 +105,16 @@ def release_state(
 ) -> np.ndarray:
     """Plant state ``[q0; 0]`` at rest in mode shape ``mode`` (1-based) scaled so that
     output ``output`` equals ``amplitude`` (the paper's release from the first eigenmode).
+
+    Examples
+    --------
+    The state at rest in mode 1 with 1 mm at the output ``tip`` (shape 1 at ``tip``):
+
+    >>> from mvtk.control import modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> release_state(plant, 1, "tip", amplitude=1e-3)
+    array([0.001, 0.   ])
     """
     if not isinstance(plant, SecondOrderSystem):
         raise ParameterError(
@@ -139,6 +161,19 @@ class Disturbance:
         Frequency of the harmonic disturbance (Hz).
     signal : array, optional
         Samples for ``kind="signal"``, one per output time.
+
+    Examples
+    --------
+    An impulse of 0.01 N s through the input ``force``: the peak displacement of the
+    mode (unit modal mass) is about ``I / w_d`` = 0.159 mm, a little less with damping:
+
+    >>> from mvtk.control import modal_plant, simulate
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> imp = Disturbance("impulse", at="force", amplitude=0.01)
+    >>> sim = simulate(plant, None, t_end=2.0, fs_out=200.0, disturbance=imp)
+    >>> round(float(abs(sim.outputs).max()) * 1e3, 3)     # mm
+    0.157
     """
 
     kind: str
@@ -486,6 +521,24 @@ def simulate(
         actuator the law drives, zero for the open loop), ``states`` (state, time),
         ``disturbance`` (time) when given; ``units`` coordinates; attrs ``controller``,
         ``fs_out``, ``method``.
+
+    Examples
+    --------
+    Release from 1 mm in mode 1, open loop and with velocity feedback. The envelope
+    ``exp(-zeta w t)`` falls to 5 % after ``ln(20) / (zeta w)`` = 4.77 s (zeta = 0.01)
+    and 1.15 s (zeta = 0.0414):
+
+    >>> from mvtk.control import VelocityFeedback, modal_plant, release_state, settling_time
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> x0 = release_state(plant, 1, "tip", 1e-3)
+    >>> sim = simulate(plant, None, t_end=8.0, fs_out=200.0, initial=x0)
+    >>> sim.outputs.dims, round(settling_time(sim.outputs.sel(output="tip")), 1)
+    (('output', 'time'), 4.8)
+    >>> closed = simulate(plant, VelocityFeedback(gain=1e-3), t_end=8.0, fs_out=200.0,
+    ...                   initial=x0)
+    >>> round(settling_time(closed.outputs.sel(output="tip")), 1)
+    1.1
     """
     import xarray as xr
 

@@ -100,6 +100,14 @@ class StabilityVerdict:
         One line naming the offending pole or the trajectory figure.
     trajectory : dict
         Energy figures of the simulated trajectory (see :func:`trajectory_stability`).
+
+    Examples
+    --------
+    Returned by :func:`stability_verdict` and the stability checks:
+
+    >>> v = stability_verdict([0.1 + 10j, 0.1 - 10j, -1.0 + 20j, -1.0 - 20j])
+    >>> v.verdict, v.offending.tolist(), v.max_real_pole
+    ('unstable', [(0.1+10j)], 0.1)
     """
 
     verdict: str
@@ -156,6 +164,13 @@ def stability_verdict(eigenvalues, *, zeta_tol: float = ZETA_TOL,
         ``<= 1e-9 max |lambda|`` near the origin) is marginal.
     source : str
         Stored in the verdict (what the poles are).
+
+    Examples
+    --------
+    >>> stability_verdict([-1 + 10j, -1 - 10j]).verdict
+    'stable'
+    >>> stability_verdict([0.1 + 10j]).verdict, stability_verdict([10j]).verdict
+    ('unstable', 'marginal')
     """
     if not (np.isfinite(zeta_tol) and 0 <= zeta_tol < 1):
         raise ParameterError(f"zeta_tol must be in [0, 1), got {zeta_tol}")
@@ -207,6 +222,16 @@ def closed_loop_stability(plant, controller, design_plant=None, *,
     (:meth:`FeedbackLaw.linearized_matrix`): this decides local stability only; use
     :func:`trajectory_stability` (or :func:`mvtk.control.compare_controllers`) for the
     behaviour along a trajectory.
+
+    Examples
+    --------
+    >>> from mvtk.control import PPF, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> closed_loop_stability(plant, PPF([(10.0, 0.1, 0.5)])).verdict
+    'stable'
+    >>> closed_loop_stability(plant, PPF([(10.0, 0.1, 1.5)])).verdict     # G > 1
+    'unstable'
     """
     law = _law(controller, plant, design_plant)
     source = "eigenvalues" if law.is_linear else "linearisation"
@@ -239,6 +264,17 @@ class LoopMargins:
     phase_crossovers, gain_crossovers : ndarray
         All crossover frequencies (rad/s); ``all_gain_margins``, ``all_phase_margins_deg``
         the margins there.
+
+    Examples
+    --------
+    Returned by :func:`loop_margins`:
+
+    >>> from mvtk.control import VelocityFeedback, loop_margins, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> m = loop_margins(plant, VelocityFeedback(gain=1e-3))
+    >>> m.gain_margin_db, m.critical_gain_factor
+    (inf, inf)
     """
 
     gain_margin: float
@@ -424,6 +460,17 @@ def loop_margins(plant, controller, design_plant=None, *,
     Returns
     -------
     LoopMargins
+
+    Examples
+    --------
+    Collocated velocity feedback never loses stability (infinite gain margin):
+
+    >>> from mvtk.control import VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> m = loop_margins(plant, VelocityFeedback(gain=1e-3))
+    >>> m.gain_margin, round(m.phase_margin_deg, 1)
+    (inf, 108.6)
     """
     law = _law(controller, plant, design_plant)
     if len(law.actuator_indices) > 1:
@@ -496,6 +543,19 @@ def trajectory_stability(plant, simulation, controller=None, design_plant=None, 
         Relative thresholds above.
     forced : bool
         The record is driven by a persistent disturbance.
+
+    Examples
+    --------
+    The energy of a released mode under velocity feedback decays along the simulation:
+
+    >>> from mvtk.control import VelocityFeedback, modal_plant, release_state, simulate
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> vf = VelocityFeedback(gain=1e-3)
+    >>> sim = simulate(plant, vf, t_end=4.0, fs_out=200.0,
+    ...                initial=release_state(plant, 1, "tip", 1e-3))
+    >>> trajectory_stability(plant, sim, vf).verdict
+    'stable'
     """
     if not (0 < decay_min < 1 and growth_max >= 0):
         raise ParameterError(
@@ -605,6 +665,15 @@ def stability_summary(plant, controller, simulation=None, design_plant=None, *,
         controller's gain units for single-gain controllers, else NaN),
         ``stability_source`` and ``stability_reason``. Margins of saturated and
         switching laws are those of the loop linearised at the origin.
+
+    Examples
+    --------
+    >>> from mvtk.control import VelocityFeedback, modal_plant
+    >>> plant = modal_plant([10.0], 0.01, B=np.array([[1.0]]), Cq=np.array([[1.0]]),
+    ...                     inputs=["force"], outputs=["tip"])     # one mode: 10 Hz, 1 %
+    >>> row = stability_summary(plant, VelocityFeedback(gain=1e-3))
+    >>> row["verdict"], round(row["min_closed_loop_zeta"], 4)
+    ('stable', 0.0414)
     """
     law = _law(controller, plant, design_plant)
     if law.is_linear or simulation is None:

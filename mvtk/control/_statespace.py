@@ -42,6 +42,18 @@ class StateSpace:
         Signal names (defaults ``u0..``, ``y0..``, ``x0..``).
     input_units, output_units : sequence of str, optional
         Unit strings per input/output (e.g. ``"V"``, ``"m"``).
+
+    Examples
+    --------
+    One mode at 10 Hz, 1 %: poles ``-zeta w +- i w_d`` and static gain ``1 / w**2``:
+
+    >>> w = 2 * np.pi * 10.0
+    >>> sys = StateSpace(np.array([[0.0, 1.0], [-w**2, -2 * 0.01 * w]]), np.array([[0.0], [1.0]]),
+    ...                  np.array([[1.0, 0.0]]), inputs=["force"], outputs=["x"])
+    >>> np.round(sys.poles(), 3)
+    array([-0.628+62.829j, -0.628-62.829j])
+    >>> round(float(sys.dc_gain()[0, 0]) * w**2, 6)
+    1.0
     """
 
     A: np.ndarray

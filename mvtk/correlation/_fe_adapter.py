@@ -22,7 +22,15 @@ FE_DIRECTIONS = ("+x", "+y", "+z", "+rx", "+ry", "+rz")
 
 
 def fe_node_ids(model: FEModel) -> np.ndarray:
-    """Node labels of an FE model (``model.node_ids`` if present, else ``1..n_nodes``)."""
+    """Node labels of an FE model (``model.node_ids`` if present, else ``1..n_nodes``).
+
+    Examples
+    --------
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> fe_node_ids(cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=4)).tolist()
+    [1, 2, 3, 4, 5]
+    """
     ids = getattr(model, "node_ids", None)
     if ids is None:
         return np.arange(1, model.n_nodes + 1, dtype=np.int64)
@@ -65,6 +73,17 @@ def fe_shapes(model: FEModel, modal: Any, *, modes: Any = None) -> xr.DataArray:
         dims ``("mode", "dof")``; ``mode`` 1-based with coordinates ``fn_hz`` and
         ``zeta`` (NaN); ``dof`` labels ``"<node><direction>"`` with ``node`` and
         ``direction`` coordinates; ``attrs`` ``normalisation="mass"``, ``source="fe"``.
+
+    Examples
+    --------
+    The two lowest modes of a steel cantilever (20 elements, 120 free DOFs):
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> shapes = fe_shapes(beam, modal_analysis(beam, 2))
+    >>> shapes.dims, shapes.shape, np.round(shapes["fn_hz"].values, 1)
+    (('mode', 'dof'), (2, 120), array([ 18.6, 116.3]))
     """
     shapes, fn = modal_arrays(modal)
     if shapes.shape[0] != model.n_dof:

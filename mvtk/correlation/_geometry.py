@@ -55,7 +55,15 @@ _UFF_DIR = {1: "+x", 2: "+y", 3: "+z", 4: "+rx", 5: "+ry", 6: "+rz",
 
 
 def direction_label(code: int | str) -> str:
-    """Convention direction name of a UFF code (``3`` -> ``"+z"``) or a name (``"z"``)."""
+    """Convention direction name of a UFF code (``3`` -> ``"+z"``) or a name (``"z"``).
+
+    Examples
+    --------
+    UFF direction codes 1..6 are +x..+rz, negative codes the opposite directions:
+
+    >>> direction_label(3), direction_label("z"), direction_label(-4)
+    ('+z', '+z', '-rx')
+    """
     if isinstance(code, str):
         s = code.strip().lower()
         if s and s[0] not in "+-":
@@ -100,6 +108,15 @@ class CoordinateSystem:
           from the local z axis and the azimuth ``phi`` from x towards y, both in
           degrees; directions 1, 2, 3 are the unit vectors of increasing ``r``,
           ``theta`` and ``phi`` at the node (a right-handed triad, as NASTRAN CORD2S).
+
+    Examples
+    --------
+    A cylindrical system about global z, origin 1 m up: (r = 1 m, theta = 90 deg,
+    z = 0.5 m) is (0, 1, 1.5) m in global coordinates:
+
+    >>> cyl = CoordinateSystem(1, np.eye(3), np.array([0.0, 0.0, 1.0]), kind="cylindrical")
+    >>> np.round(cyl.to_global(np.array([1.0, 90.0, 0.5])), 6) + 0.0
+    array([0. , 1. , 1.5])
     """
 
     id: int
@@ -230,6 +247,13 @@ class Sensor:
         ``"default +z"`` (a CSV table without a ``directions`` column: one global +z
         sensor per node assumed) or ``"user"`` (given in code: :meth:`TestGeometry.with_sensors`,
         ``read_test_geometry(..., sensors=...)``, e.g. the DOFs of a measurement).
+
+    Examples
+    --------
+    An accelerometer at test node 3 measuring along +z of the node's system:
+
+    >>> Sensor(3, "+z")
+    Sensor(node=3, direction='+z', vector=None, rotation=False, source='user')
     """
 
     node: int
@@ -297,6 +321,17 @@ class TestGeometry:
     sensors : tuple of Sensor
         Measured DOFs, in the order of the ``dof`` dimension of test shapes.
     name : str
+
+    Examples
+    --------
+    Built by :func:`read_test_geometry` (or directly); sensor DOFs are labelled
+    ``<node><direction>``:
+
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> geo.n_nodes, geo.dof_labels
+    (3, ['1+z', '2+z', '3+z'])
     """
 
     __test__ = False  # not a pytest test class
@@ -559,6 +594,17 @@ def read_test_geometry(source: str | Path | Mapping[str, Any], *, units_scale: f
         Unreadable file; the message names the file and the record, row or key.
     UnsupportedFormatError
         Unknown file extension.
+
+    Examples
+    --------
+    A geometry given as a mapping (the layout of a TOML file): three nodes along x (m)
+    with one +z sensor each:
+
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> geo.node.tolist(), [(s.node, s.direction) for s in geo.sensors]
+    ([1, 2, 3], [(1, '+z'), (2, '+z'), (3, '+z')])
     """
     if isinstance(units_scale, bool) or not isinstance(units_scale, int | float) or not (
             np.isfinite(units_scale) and units_scale > 0):

@@ -47,6 +47,14 @@ def shape_functions(kind: str, xi: float, eta: float) -> tuple[np.ndarray, np.nd
     -------
     N : ndarray (n,)
     dN : ndarray (n, 2)
+
+    Examples
+    --------
+    At the centre of a quad4 every bilinear shape function is 1/4:
+
+    >>> N, dN = shape_functions("quad4", 0.0, 0.0)
+    >>> N, dN.shape
+    (array([0.25, 0.25, 0.25, 0.25]), (4, 2))
     """
     if kind == "quad4":
         s = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)
@@ -118,6 +126,22 @@ class DofMapping:
         ``n_constrained`` (FE DOFs of the row that are constrained, read as zero).
     method : str
     tol : float
+
+    Examples
+    --------
+    Returned by :func:`map_sensors`; ``report`` says how each sensor was mapped (on a
+    beam model: to the nearest node):
+
+    >>> from mvtk.correlation import read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> mapping = map_sensors(geo, beam)
+    >>> mapping.report[["dof", "method"]].values.tolist()[0], mapping.n_fe_dof
+    (['1+z', 'nearest'], 72)
     """
 
     matrix: sp.csr_matrix
@@ -219,6 +243,22 @@ def map_sensors(
     ParameterError
         No sensors, unknown method, or a sensor off the model beyond ``tol`` (the
         message lists each such sensor with its distance).
+
+    Examples
+    --------
+    Three +z sensors on a steel cantilever: each row of the observation matrix
+    interpolates the FE DOFs under the sensor:
+
+    >>> from mvtk.correlation import read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> mapping = map_sensors(geo, beam)
+    >>> mapping.dof, mapping.matrix.shape
+    (['1+z', '2+z', '3+z'], (3, 72))
     """
     from scipy.spatial import cKDTree
 

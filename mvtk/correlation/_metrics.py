@@ -118,7 +118,18 @@ def mac(a: Any, b: Any | None = None) -> xr.DataArray:
 
 def automac(a: Any) -> xr.DataArray:
     """AutoMAC of one shape set (``mac(a, a)``); off-diagonal terms near 1 mean the
-    sensors cannot tell those modes apart (spatial aliasing)."""
+    sensors cannot tell those modes apart (spatial aliasing).
+
+    Examples
+    --------
+    Two shapes of three DOFs; the off-diagonal term is
+    ``(a1 . a2)**2 / (|a1|**2 |a2|**2)`` = 0.2492**2 / (0.7071 x 1.1961):
+
+    >>> a = np.array([[0.114, 0.394, 0.734], [-0.542, -0.593, 0.742]])
+    >>> np.round(automac(a).values, 3)
+    array([[1.   , 0.073],
+           [0.073, 1.   ]])
+    """
     return mac(a, a)
 
 
@@ -127,6 +138,14 @@ def msf(a: Any, b: Any) -> xr.DataArray:
 
     ``MSF_i = (b_i^H a_i) / (b_i^H b_i)`` (least squares). ``a`` and ``b`` hold the
     same number of modes, paired by position.
+
+    Examples
+    --------
+    ``b = -2 a`` is scaled back onto ``a`` by -1/2:
+
+    >>> a = np.array([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]])
+    >>> msf(a, -2 * a).values
+    array([-0.5, -0.5])
     """
     A, B = _aligned(a, b)
     if A.sizes["mode"] != B.sizes["mode"]:
@@ -188,6 +207,14 @@ def comac(a: Any, b: Any, *, variant: str = "signed") -> xr.DataArray:
     -------
     xarray.DataArray
         dims ``("dof",)``, values in [0, 1]; 1 = the DOF agrees in every mode.
+
+    Examples
+    --------
+    Shapes that agree up to scale give COMAC 1 at every DOF:
+
+    >>> a = np.array([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]])
+    >>> np.round(comac(a, -2 * a).values, 6)
+    array([1., 1., 1.])
     """
     if variant not in ("signed", "lieven_ewins"):
         raise ParameterError(f"variant must be 'signed' or 'lieven_ewins', got {variant!r}")
@@ -209,6 +236,18 @@ def ecomac(a: Any, b: Any) -> xr.DataArray:
     Shapes are unit-normalised and ``b`` is sign/phase-aligned onto ``a``. 0 = perfect
     agreement; a DOF with a large value is in error (unlike COMAC it is not diluted by
     the amplitude of the DOF).
+
+    Examples
+    --------
+    Shapes that agree up to scale give eCOMAC 0; an error at DOF 3 shows there:
+
+    >>> a = np.array([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]])
+    >>> np.round(ecomac(a, -2 * a).values, 6)
+    array([0., 0., 0.])
+    >>> b = a.copy()
+    >>> b[:, 2] *= 1.5
+    >>> int(np.argmax(ecomac(a, b).values))
+    2
     """
     A, B = _aligned(a, b)
     x, y = _paired_unit(A, B)
@@ -246,6 +285,24 @@ def guyan_tam(model, observation) -> np.ndarray:
     -------
     ndarray (n_sensors, n_sensors)
         ``T' M T`` (kg).
+
+    Examples
+    --------
+    Guyan TAM of a steel cantilever at three +z sensors; the FE shapes at the sensors are
+    then nearly orthogonal in it (exact orthogonality needs SEREP):
+
+    >>> from mvtk.correlation import correlate, read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> res = correlate(geo, beam, modal_analysis(beam, 2))
+    >>> tam = guyan_tam(beam, res.mapping)              # kg
+    >>> tam.shape, np.round(cross_orthogonality(res.fe, None, tam).values, 2)
+    ((3, 3), array([[ 1.  , -0.01],
+           [-0.01,  1.  ]]))
     """
     from ..fe._solvers import factorize
 
@@ -276,6 +333,25 @@ def serep_tam(modal_shapes: np.ndarray, observation, mass=None) -> np.ndarray:
     observation : DofMapping or matrix (n_sensors, n_dof)
     mass : sparse or ndarray, optional
         FE mass matrix.
+
+    Examples
+    --------
+    SEREP TAM of the two lowest modes of a steel cantilever at three +z sensors: the FE
+    shapes are exactly orthogonal in it:
+
+    >>> from mvtk.correlation import correlate, read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=12)
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> fe = modal_analysis(beam, 2)
+    >>> res = correlate(geo, beam, fe)
+    >>> tam = serep_tam(fe.shapes, res.mapping)
+    >>> np.round(cross_orthogonality(res.fe, None, tam).values, 6) + 0.0
+    array([[1., 0.],
+           [0., 1.]])
     """
     Phi = np.asarray(modal_shapes, dtype=float)
     C = _observation(observation, Phi.shape[0])
@@ -312,6 +388,16 @@ def cross_orthogonality(a: Any, b: Any | None, tam: np.ndarray) -> xr.DataArray:
         Near +-1 on paired modes and near 0 elsewhere when test and model agree
         (common acceptance: diagonal terms above 0.9 and off-diagonal terms below 0.1,
         in absolute value).
+
+    Examples
+    --------
+    With an identity TAM the cross-orthogonality of unit-normalised orthogonal shapes is
+    the identity:
+
+    >>> a = np.array([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]])
+    >>> np.round(np.abs(cross_orthogonality(a, -2 * a, np.eye(3)).values), 6)
+    array([[1., 0.],
+           [0., 1.]])
     """
     A, B = _aligned(a, a if b is None else b)
     Mt = np.asarray(tam)
@@ -363,6 +449,18 @@ def frac(measured: xr.DataArray, analysis: xr.DataArray) -> xr.DataArray:
     Returns
     -------
     xarray.DataArray ("response", "reference")
+
+    Examples
+    --------
+    An FRF compared with itself gives FRAC 1:
+
+    >>> import xarray as xr
+    >>> shapes = xr.DataArray([[1.0, 0.5]], dims=("mode", "dof"),
+    ...                       coords={"dof": ["1+z", "2+z"], "fn_hz": ("mode", [10.0])})
+    >>> h = synthesize_frf(shapes, np.arange(1.0, 20.0), references=["1+z"], zeta=0.01)
+    >>> np.round(frac(h, h).values, 6)
+    array([[1.],
+           [1.]])
     """
     x, a = _frf_pair(measured, analysis)
     hx, ha = x.values, a.values
@@ -378,6 +476,17 @@ def csac(measured: xr.DataArray, analysis: xr.DataArray) -> xr.DataArray:
 
     ``CSAC(f) = |H_x(f)^H H_a(f)|^2 / ((H_x^H H_x)(H_a^H H_a))`` over the response DOFs:
     the MAC of the operating deflection shapes at each frequency line.
+
+    Examples
+    --------
+    CSAC is blind to scale: twice the FRF still gives 1 at every line:
+
+    >>> import xarray as xr
+    >>> shapes = xr.DataArray([[1.0, 0.5]], dims=("mode", "dof"),
+    ...                       coords={"dof": ["1+z", "2+z"], "fn_hz": ("mode", [10.0])})
+    >>> h = synthesize_frf(shapes, np.arange(1.0, 20.0), references=["1+z"], zeta=0.01)
+    >>> float(np.round(csac(h, 2 * h).values.min(), 6))
+    1.0
     """
     x, a = _frf_pair(measured, analysis)
     hx, ha = x.values, a.values
@@ -393,6 +502,17 @@ def csf(measured: xr.DataArray, analysis: xr.DataArray) -> xr.DataArray:
 
     ``CSF(f) = 2 |H_x^H H_a| / (H_x^H H_x + H_a^H H_a)``: 1 only when the deflection
     shapes also agree in amplitude (CSAC is blind to scale).
+
+    Examples
+    --------
+    CSF sees the scale: twice the FRF gives ``2 * 2 / (1 + 4)`` = 0.8 at every line:
+
+    >>> import xarray as xr
+    >>> shapes = xr.DataArray([[1.0, 0.5]], dims=("mode", "dof"),
+    ...                       coords={"dof": ["1+z", "2+z"], "fn_hz": ("mode", [10.0])})
+    >>> h = synthesize_frf(shapes, np.arange(1.0, 20.0), references=["1+z"], zeta=0.01)
+    >>> float(np.round(csf(h, 2 * h).values.max(), 6))
+    0.8
     """
     x, a = _frf_pair(measured, analysis)
     hx, ha = x.values, a.values
@@ -435,6 +555,18 @@ def synthesize_frf(
     xarray.DataArray ("response", "reference", "frequency")
         Complex, with the coordinates of the conventions; ``attrs["estimator"] =
         "modal synthesis"``.
+
+    Examples
+    --------
+    A single mass-normalised mode at 10 Hz, shape 1 at one DOF: at 0 Hz the receptance is
+    ``phi**2 / w_n**2`` (m/N):
+
+    >>> import xarray as xr
+    >>> shapes = xr.DataArray([[1.0]], dims=("mode", "dof"),
+    ...                       coords={"dof": ["1+z"], "fn_hz": ("mode", [10.0])})
+    >>> h = synthesize_frf(shapes, [0.0, 10.0], references=["1+z"], zeta=0.01)
+    >>> h.dims, round(float(h.real[0, 0, 0]) * (2 * np.pi * 10.0) ** 2, 6)
+    (('response', 'reference', 'frequency'), 1.0)
     """
     S = _as_shapes(shapes, "shapes")
     if "fn_hz" not in S.coords:

@@ -31,6 +31,18 @@ class ModePairing:
         The full MAC matrix (test modes x FE modes).
     swaps : tuple of (int, int)
         Test-mode pairs whose FE partners are in swapped order.
+
+    Examples
+    --------
+    Returned by :func:`pair_modes` (and in :class:`CorrelationResult`): the pair table:
+
+    >>> import xarray as xr
+    >>> fe = xr.DataArray([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]], dims=("mode", "dof"),
+    ...                   coords={"mode": [1, 2], "dof": ["1+z", "2+z", "3+z"],
+    ...                           "fn_hz": ("mode", [10.0, 30.0])})
+    >>> pairing = pair_modes(-fe, fe)
+    >>> pairing.table[["test_mode", "fe_mode"]].values.tolist(), pairing.swaps
+    ([[1, 1], [2, 2]], ())
     """
 
     table: Any
@@ -92,6 +104,20 @@ def pair_modes(
     Returns
     -------
     ModePairing
+
+    Examples
+    --------
+    Two "test" modes that are the FE modes in reverse order (and scaled): each is paired
+    with its FE mode at MAC 1:
+
+    >>> import xarray as xr
+    >>> fe = xr.DataArray([[1.0, 2.0, 3.0], [1.0, 1.0, -1.0]], dims=("mode", "dof"),
+    ...                   coords={"mode": [1, 2], "dof": ["1+z", "2+z", "3+z"],
+    ...                           "fn_hz": ("mode", [10.0, 30.0])})
+    >>> test = -2.0 * fe.isel(mode=[1, 0]).assign_coords(mode=[1, 2], fn_hz=("mode", [31.0, 9.8]))
+    >>> pairing = pair_modes(test, fe)
+    >>> pairing.table[["test_mode", "fe_mode", "mac"]].round(6).values.tolist()
+    [[1.0, 2.0, 1.0], [2.0, 1.0, 1.0]]
     """
     import pandas as pd
     from scipy.optimize import linear_sum_assignment

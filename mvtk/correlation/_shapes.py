@@ -49,6 +49,24 @@ def shapes_at_sensors(mode_shape: xr.DataArray, geometry, *, source: str = "") -
     ------
     DimensionError
         Wrong dims, or a sensor's node or component is not in the shapes.
+
+    Examples
+    --------
+    One measured mode as node vectors (UFF 55 layout: mode, node, component), read
+    along three +z sensors:
+
+    >>> import xarray as xr
+    >>> from mvtk.correlation import read_test_geometry
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> shape = xr.DataArray([[[0, 0, 0.2], [0, 0, 0.6], [0, 0, 1.0]]],
+    ...                      dims=("mode", "node", "component"),
+    ...                      coords={"mode": [1], "node": [1, 2, 3],
+    ...                              "component": ["ux", "uy", "uz"], "fn_hz": ("mode", [18.6])})
+    >>> s = shapes_at_sensors(shape, geo)
+    >>> s.dims, s.values.tolist()
+    (('mode', 'dof'), [[0.2, 0.6, 1.0]])
     """
     where = f"{source}: " if source else ""
     if not isinstance(mode_shape, xr.DataArray) or set(mode_shape.dims) != {
@@ -102,6 +120,24 @@ def read_test_shapes(path: str | Path, geometry) -> xr.DataArray:
     ------
     FormatError
         The file holds neither form.
+
+    Examples
+    --------
+    Shapes saved as a ``("mode", "dof")`` DataArray in netCDF, with sensor labels as ``dof``:
+
+    >>> import pathlib, tempfile
+    >>> import xarray as xr
+    >>> from mvtk.correlation import read_test_geometry
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "shapes.nc"
+    >>> xr.DataArray([[0.2, 0.6, 1.0]], dims=("mode", "dof"), name="shapes",
+    ...              coords={"mode": [1], "dof": ["1+z", "2+z", "3+z"],
+    ...                      "fn_hz": ("mode", [18.6])}).to_netcdf(path)
+    >>> s = read_test_shapes(path, geo)
+    >>> s.values.tolist(), s["fn_hz"].values.tolist()
+    ([[0.2, 0.6, 1.0]], [18.6])
     """
     import mvtk.io
 

@@ -69,6 +69,16 @@ class HalfPowerResult:
         Why a row is not reliable (empty when it is), in words.
     coherence : numpy.ndarray
         Mean coherence at the peak line (NaN when the input carries none).
+
+    Examples
+    --------
+    Returned by :func:`half_power`; ``to_dataframe`` gives one row per curve and mode:
+
+    >>> from mvtk import testing
+    >>> h = testing.modal_frf(np.arange(0.0, 100.0, 0.05), 20.0, 0.01)  # 20 Hz, 1 %
+    >>> res = half_power(h, fn_hz=[20.0])
+    >>> res.to_dataframe()[["fn_hz", "zeta"]].round(3).values.tolist()
+    [[20.0, 0.01]]
     """
 
     curve: tuple[str, ...]
@@ -125,6 +135,17 @@ def half_power_zeta(f1_hz, f2_hz, kind: str = "mobility"):
     Returns
     -------
     fn_hz, zeta : numpy.ndarray
+
+    Examples
+    --------
+    For mobility the half-power points of a 20 Hz mode at 2 % are exactly
+    ``w1,2 = wn (sqrt(1 + zeta**2) -+ zeta)``:
+
+    >>> z, fn = 0.02, 20.0
+    >>> f1, f2 = fn * (np.sqrt(1 + z**2) - z), fn * (np.sqrt(1 + z**2) + z)
+    >>> fn_hz, zeta = half_power_zeta(f1, f2, kind="mobility")
+    >>> round(float(fn_hz), 6), round(float(zeta), 6)
+    (20.0, 0.02)
     """
     if kind not in _POWER:
         raise ParameterError(f"kind must be one of {sorted(_POWER)}, got {kind!r}")

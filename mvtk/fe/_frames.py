@@ -34,6 +34,15 @@ class CoordinateSystem:
         Global coordinates (m).
     axes : (3, 3) float
         Rows: the unit x, y, z axes in global components (orthonormal, right-handed).
+
+    Examples
+    --------
+    A cylindrical system about global z: the point (r = 1 m, theta = 90 deg, z = 0.5 m)
+    is (0, 1, 0.5) in global coordinates:
+
+    >>> cyl = CoordinateSystem("C", np.zeros(3), np.eye(3))
+    >>> np.round(cyl.to_global([1.0, 90.0, 0.5]), 6) + 0.0
+    array([0. , 1. , 0.5])
     """
 
     kind: str

@@ -95,6 +95,19 @@ class Laminate:
         reference surface.
     thickness : float
         Total thickness (m).
+
+    Examples
+    --------
+    A single 2 mm steel ply: bending stiffness ``D = E h**3 / (12 (1 - nu**2))`` and
+    mass per area ``I0 = rho h``:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> lam = Laminate((Ply(steel, 2e-3),))
+    >>> round(float(lam.D[0, 0]), 3), round(2.1e11 * 2e-3**3 / (12 * (1 - 0.3**2)), 3)   # N m
+    (153.846, 153.846)
+    >>> lam.thickness, round(lam.I0, 3)                                         # m, kg/m^2
+    (0.002, 15.7)
     """
 
     plies: tuple[Ply, ...]

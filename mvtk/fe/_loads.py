@@ -65,6 +65,18 @@ def nodal_load(model: FEModel, forces: np.ndarray) -> np.ndarray:
     Returns
     -------
     ndarray (n_dof,)
+
+    Examples
+    --------
+    A 1 N force along z at node 1 of a 2 kg mass on a spring lands on its uz DOF:
+
+    >>> from mvtk.fe import PointMass, Spring, assemble_model
+    >>> model = assemble_model(np.zeros((1, 3)), [PointMass(0, 2.0), Spring(0, {"uz": 1e5})],
+    ...                        supports={"base": ["ux", "uy"]}, node_sets={"base": [0]})
+    >>> forces = np.zeros((1, 6))
+    >>> forces[0, 2] = 1.0                            # N
+    >>> nodal_load(model, forces)
+    array([1.])
     """
     f = np.asarray(forces, dtype=float)
     if f.shape != (model.n_nodes, 6) or not np.all(np.isfinite(f)):
@@ -87,7 +99,23 @@ def _full(A_model: FEModel, which: str) -> sp.csr_matrix:
 
 
 def gravity_nodal(model: FEModel, acceleration: Sequence[float]) -> np.ndarray:
-    """Nodal forces ``(n_nodes, 6)`` of the body force ``rho a`` (a in m/s^2)."""
+    """Nodal forces ``(n_nodes, 6)`` of the body force ``rho a`` (a in m/s^2).
+
+    Examples
+    --------
+    Self weight of the 300 x 20 x 2 mm steel strip: ``rho A L g`` = 0.924 N in total:
+
+    >>> from mvtk.fe import (BeamSet, IsotropicMaterial, assemble_model,
+    ...                      rectangle_section)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> nodes = np.c_[np.linspace(0.0, 0.3, 21), np.zeros(21), np.zeros(21)]
+    >>> model = assemble_model(nodes, [BeamSet(np.c_[np.arange(20), np.arange(1, 21)],
+    ...                                        rectangle_section(steel, 0.02, 0.002))],
+    ...                        supports={"root": "clamped"}, node_sets={"root": [0]})
+    >>> f = gravity_nodal(model, (0.0, 0.0, -9.81))           # N, N m per node
+    >>> f.shape, round(float(f[:, 2].sum()), 4), round(-7850.0 * 0.02 * 0.002 * 0.3 * 9.81, 4)
+    ((21, 6), -0.9241, -0.9241)
+    """
     a = np.asarray(acceleration, dtype=float)
     if a.shape != (3,) or not np.all(np.isfinite(a)):
         raise ParameterError(f"acceleration must be 3 finite numbers (m/s^2), got "
@@ -112,13 +140,38 @@ def gravity_load(model: FEModel, acceleration: Sequence[float] = (0.0, 0.0, -9.8
     Returns
     -------
     ndarray (n_dof,)
+
+    Examples
+    --------
+    Standard gravity on a 2 kg point mass on a spring (1e5 N/m along z):
+    ``K u = -m g`` gives ``u = -m g / k`` = -0.196 mm:
+
+    >>> from mvtk.fe import PointMass, Spring, assemble_model, static_solve
+    >>> model = assemble_model(np.zeros((1, 3)), [PointMass(0, 2.0), Spring(0, {"uz": 1e5})],
+    ...                        supports={"base": ["ux", "uy"]}, node_sets={"base": [0]})
+    >>> f = gravity_load(model)                       # N over the free DOFs
+    >>> round(float(static_solve(model, f)[0]) * 1e3, 4)
+    -0.1961
     """
     return nodal_load(model, gravity_nodal(model, acceleration))
 
 
 def pressure_nodal(model: FEModel, pressure: float, element_set: str | None = None
                    ) -> np.ndarray:
-    """Nodal forces ``(n_nodes, 6)`` of a uniform pressure (Pa) on shell elements."""
+    """Nodal forces ``(n_nodes, 6)`` of a uniform pressure (Pa) on shell elements.
+
+    Examples
+    --------
+    1 kPa on a 300 x 200 mm plate: the nodal forces add up to ``p A`` = 60 N:
+
+    >>> from mvtk.fe import (IsotropicMaterial, Laminate, Ply, ShellSet, assemble_model,
+    ...                      rectangular_plate_mesh)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=3, ny=2)
+    >>> model = assemble_model(mesh.nodes, [ShellSet(mesh.elements, Laminate((Ply(steel, 2e-3),)))])
+    >>> round(float(pressure_nodal(model, 1000.0)[:, 2].sum()), 6)    # N
+    60.0
+    """
     if not np.isfinite(pressure):
         raise ParameterError(f"pressure must be finite (Pa), got {pressure!r}")
     shells = [m for m in _members(model) if isinstance(m, ShellSet)]
@@ -183,6 +236,19 @@ def pressure_load(model: FEModel, pressure: float, element_set: str | None = Non
     Returns
     -------
     ndarray (n_dof,)
+
+    Examples
+    --------
+    1 kPa on a 300 x 200 mm plate: the load vector carries ``p A`` = 60 N along z:
+
+    >>> from mvtk.fe import (IsotropicMaterial, Laminate, Ply, ShellSet, assemble_model,
+    ...                      rectangular_plate_mesh)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=3, ny=2)
+    >>> model = assemble_model(mesh.nodes, [ShellSet(mesh.elements, Laminate((Ply(steel, 2e-3),)))])
+    >>> f = pressure_load(model, 1000.0)
+    >>> round(float(f[model.dof_component == 2].sum()), 6)
+    60.0
     """
     return nodal_load(model, pressure_nodal(model, pressure, element_set))
 
@@ -197,6 +263,19 @@ class StaticSolution:
         Global nodal displacements (m) and rotations (rad).
     reaction : ndarray (n_nodes, 6)
         Global reaction forces (N) and moments (N m) at the supports (zero elsewhere).
+
+    Examples
+    --------
+    Returned by :func:`static_solution`; displacements and reactions per node, global axes:
+
+    >>> from mvtk.fe import PointMass, Spring, assemble_model
+    >>> model = assemble_model(np.zeros((1, 3)), [PointMass(0, 2.0), Spring(0, {"uz": 1e5})],
+    ...                        supports={"base": ["ux", "uy"]}, node_sets={"base": [0]})
+    >>> forces = np.zeros((1, 6))
+    >>> forces[0, 2] = -10.0                                     # N
+    >>> sol = static_solution(model, forces)
+    >>> round(float(sol.displacement[0, 2]) * 1e3, 6), sol.reaction.shape   # mm: F / k
+    (-0.1, (1, 6))
     """
 
     displacement: np.ndarray
@@ -224,6 +303,25 @@ def static_solution(model: FEModel, forces: np.ndarray) -> StaticSolution:
     StaticSolution
         The reactions are ``K_full u - f`` at the DOFs that carry no free DOF, so they
         balance the applied load.
+
+    Examples
+    --------
+    The steel strip (300 x 20 x 2 mm) under its own weight: the clamp carries the weight
+    (0.924 N) and the tip sags ``q L**4 / (8 E I)`` = 1.114 mm:
+
+    >>> from mvtk.fe import (BeamSet, IsotropicMaterial, assemble_model,
+    ...                      rectangle_section)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> nodes = np.c_[np.linspace(0.0, 0.3, 21), np.zeros(21), np.zeros(21)]
+    >>> model = assemble_model(nodes, [BeamSet(np.c_[np.arange(20), np.arange(1, 21)],
+    ...                                        rectangle_section(steel, 0.02, 0.002))],
+    ...                        supports={"root": "clamped"}, node_sets={"root": [0]})
+    >>> sol = static_solution(model, gravity_nodal(model, (0.0, 0.0, -9.81)))
+    >>> round(float(sol.reaction[0, 2]), 4), round(float(sol.displacement[20, 2]) * 1e3, 3)
+    (0.9241, -1.114)
+    >>> q, EI = 7850.0 * 0.02 * 0.002 * 9.81, 2.1e11 * 0.02 * 0.002**3 / 12
+    >>> round(-q * 0.3**4 / (8 * EI) * 1e3, 3)
+    -1.114
     """
     f = np.asarray(forces, dtype=float)
     if any(isinstance(m, RigidLink) for m in _members(model)):

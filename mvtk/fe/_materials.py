@@ -36,6 +36,15 @@ class OrthotropicMaterial:
         Major Poisson ratio (nu21 = nu12 E2 / E1).
     rho : float
         Density (kg/m^3).
+
+    Examples
+    --------
+    A unidirectional carbon/epoxy ply; the minor Poisson ratio is ``nu12 E2 / E1``:
+
+    >>> cfrp = OrthotropicMaterial("T300/5208", E1=181e9, E2=10.3e9, G12=7.17e9,
+    ...                            G13=7.17e9, G23=3.4e9, nu12=0.28, rho=1600.0)
+    >>> round(cfrp.nu21, 5)
+    0.01593
     """
 
     name: str
@@ -76,7 +85,16 @@ class OrthotropicMaterial:
 
 @dataclass(frozen=True)
 class IsotropicMaterial(OrthotropicMaterial):
-    """Isotropic material from E (Pa), nu and rho (kg/m^3)."""
+    """Isotropic material from E (Pa), nu and rho (kg/m^3).
+
+    Examples
+    --------
+    Steel in SI units (Pa, -, kg/m^3); the shear modulus is ``E / (2 (1 + nu))``:
+
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> round(steel.G / 1e9, 3)       # GPa
+    80.769
+    """
 
     def __init__(self, name: str, E: float, nu: float, rho: float):
         if not (-1.0 < nu < 0.5):
@@ -131,6 +149,14 @@ class PiezoMaterial(IsotropicMaterial):
     eps33 : float, optional
         Permittivity at constant stress ``eps33^T`` (F/m), needed for the capacitance
         and every electrical condition other than a driven voltage. Default: unknown.
+
+    Examples
+    --------
+    PIC 151-like ceramic: E = 67 GPa (short circuit), d31 = -210 pm/V, eps33 = 21 nF/m:
+
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10, eps33=2.1e-8)
+    >>> pzt.d32 == pzt.d31, is_piezo(pzt)
+    (True, True)
     """
 
     d31: float = 0.0
@@ -159,6 +185,16 @@ class OrthotropicPiezoMaterial(OrthotropicMaterial):
         direction (m/V).
     eps33 : float, optional
         Permittivity at constant stress (F/m).
+
+    Examples
+    --------
+    A d31-type macro-fibre composite (elastic constants in Pa, d31/d32 in m/V):
+
+    >>> mfc = OrthotropicPiezoMaterial("MFC", E1=30.336e9, E2=15.857e9, G12=5.515e9,
+    ...                                G13=5.515e9, G23=5.515e9, nu12=0.31, rho=5440.0,
+    ...                                d31=-1.7e-10, d32=1.3e-10)
+    >>> is_piezo(mfc), round(mfc.nu21, 4)
+    (True, 0.162)
     """
 
     d31: float = 0.0
@@ -174,7 +210,15 @@ class OrthotropicPiezoMaterial(OrthotropicMaterial):
 
 
 def is_piezo(material) -> bool:
-    """True for a material poled through the thickness (with d31/d32)."""
+    """True for a material poled through the thickness (with d31/d32).
+
+    Examples
+    --------
+    >>> is_piezo(IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0))
+    False
+    >>> is_piezo(PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10))
+    True
+    """
     return isinstance(material, PiezoMaterial | OrthotropicPiezoMaterial)
 
 
@@ -189,6 +233,14 @@ class Ply:
         Ply thickness (m).
     angle_deg : float
         Orientation of material axis 1 from the element/global x axis (degrees).
+
+    Examples
+    --------
+    A 0.125 mm ply of steel at 45 degrees:
+
+    >>> ply = Ply(IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0), 1.25e-4, angle_deg=45.0)
+    >>> ply.thickness, ply.angle_deg
+    (0.000125, 45.0)
     """
 
     material: OrthotropicMaterial

@@ -67,6 +67,21 @@ class FEModel:
     node_ids : ndarray of int, shape (n_nodes,), optional
         External node labels (e.g. the ids of an imported mesh or of test software);
         default ``1..n_nodes``. Must be unique.
+
+    Examples
+    --------
+    Built by the generators and readers (here a 4-element cantilever, 6 DOFs per node, the
+    clamped node removed); DOFs are addressed by node and component:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(IsotropicMaterial("steel", 2.1e11, 0.3,
+    ...                                                          7850.0), 2e-3)], n_elements=4)
+    >>> beam.n_nodes, beam.n_dof, beam.M.shape
+    (5, 24, (24, 24))
+    >>> beam.dof_index(4, "uz"), int(beam.node_ids[4])    # free-DOF index; label of node 4
+    (20, 5)
+    >>> beam.nearest_node([0.29, 0.0, 0.0])
+    4
     """
 
     nodes: np.ndarray

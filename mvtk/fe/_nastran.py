@@ -255,6 +255,14 @@ def read_bulk_cards(path: str | Path) -> list[_Card]:
     FormatError
         A continuation without a card, text beyond column 80 of a fixed-field line, an
         unreadable INCLUDE; the message names the file and line.
+
+    Examples
+    --------
+    >>> import pathlib, tempfile
+    >>> deck = pathlib.Path(tempfile.mkdtemp()) / "spring.bdf"
+    >>> _ = deck.write_text("BEGIN BULK\\nGRID,1,,0.,0.,0.\\nCELAS2,20,1.0e5,1,3\\nENDDATA\\n")
+    >>> [(card.name, list(card)) for card in read_bulk_cards(deck)]
+    [('GRID', ['1', '', '0.', '0.', '0.']), ('CELAS2', ['20', '1.0e5', '1', '3'])]
     """
     path = Path(path)
     if not path.exists():
@@ -585,6 +593,23 @@ def read_nastran(path: str | Path, spc_id: int | None = None, name: str = "") ->
     FormatError
         Unsupported cards (all listed with their counts), missing references,
         unsupported options; the message names the file and line.
+
+    Examples
+    --------
+    The 2-mass chain as a Nastran deck (GRID 1 grounded, CONM2 1 kg, CELAS2 1e5 N/m);
+    closed form ``f1 = sqrt(k (3 - sqrt(5)) / 2) / (2 pi)`` = 31.105 Hz:
+
+    >>> import pathlib, tempfile
+    >>> from mvtk.fe import modal_analysis
+    >>> deck = pathlib.Path(tempfile.mkdtemp()) / "chain.bdf"
+    >>> _ = deck.write_text("BEGIN BULK\\n"
+    ...                     "GRID,1,,0.,0.,0.\\nGRID,2,,0.1,0.,0.\\nGRID,3,,0.2,0.,0.\\n"
+    ...                     "CONM2,10,2,,1.0\\nCONM2,11,3,,1.0\\n"
+    ...                     "CELAS2,20,1.0e5,1,3,2,3\\nCELAS2,21,1.0e5,2,3,3,3\\n"
+    ...                     "SPC1,1,123456,1\\nSPC1,1,12456,2,3\\nENDDATA\\n")
+    >>> model = read_nastran(deck)
+    >>> model.n_dof, np.round(modal_analysis(model, 1).fn_hz, 3)
+    (2, array([31.105]))
     """
     path = Path(path)
     if not path.exists():

@@ -53,6 +53,24 @@ class Op4Matrix:
         Nastran matrix form (6 = symmetric, ...; see :data:`FORMS`).
     matrix : scipy.sparse.csc_matrix
         The values (float or complex), shape ``(nrow, ncol)``.
+
+    Examples
+    --------
+    Returned by :func:`read_op4`; ``"file.op4:KAA"`` picks it in :func:`mvtk.fe.read_matrices`.
+    The 2-mass chain of :func:`read_op4`'s example, unit masses, DOFs along z; closed form
+    ``f1 = sqrt(k (3 - sqrt(5)) / 2) / (2 pi)`` = 31.105 Hz:
+
+    >>> import pathlib, tempfile
+    >>> from mvtk.fe import modal_analysis, read_matrices
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "kaa.op4"
+    >>> _ = path.write_text(
+    ...     "       2       2       6       2KAA      1P,3E23.16\\n"
+    ...     "       1       1       2\\n 2.0000000000000000E+05-1.0000000000000000E+05\\n"
+    ...     "       2       1       2\\n-1.0000000000000000E+05 1.0000000000000000E+05\\n"
+    ...     "       3       1       1\\n 1.0000000000000000E+00\\n")
+    >>> model = read_matrices(f"{path}:KAA", np.eye(2), np.array([[1, 3], [2, 3]]))
+    >>> np.round(modal_analysis(model, 1).fn_hz, 3)
+    array([31.105])
     """
 
     name: str
@@ -312,6 +330,23 @@ def read_op4(path: str | Path) -> dict[str, Op4Matrix]:
     FormatError
         Missing file, or content that is not OP4; the message names the file, the line
         (ASCII) or record (binary) and the matrix.
+
+    Examples
+    --------
+    A 2 x 2 stiffness matrix (the 2-mass chain, N/m) written by hand as an ASCII OUTPUT4
+    file (header, one record per column, the end record):
+
+    >>> import pathlib, tempfile
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "kaa.op4"
+    >>> _ = path.write_text(
+    ...     "       2       2       6       2KAA      1P,3E23.16\\n"
+    ...     "       1       1       2\\n 2.0000000000000000E+05-1.0000000000000000E+05\\n"
+    ...     "       2       1       2\\n-1.0000000000000000E+05 1.0000000000000000E+05\\n"
+    ...     "       3       1       1\\n 1.0000000000000000E+00\\n")
+    >>> mats = read_op4(path)
+    >>> list(mats), mats["KAA"].form, mats["KAA"].matrix.toarray() / 1e5
+    (['KAA'], 6, array([[ 2., -1.],
+           [-1.,  1.]]))
     """
     path = Path(path)
     if not path.is_file():

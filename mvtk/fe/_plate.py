@@ -23,6 +23,19 @@ class SpringSupport(tuple):
 
     ``k`` is N/m (translations) or N m/rad (rotations) per node, or per metre of edge
     when ``per_length`` is True (distributed with the trapezoidal rule).
+
+    Examples
+    --------
+    A stiff spring (1e9 N/m) under the tip of the steel cantilever acts almost as a pin:
+    the first frequency approaches the clamped-pinned 81.4 Hz:
+
+    >>> from mvtk.fe import (IsotropicMaterial, Ply, cantilever_beam, constrain_model,
+    ...                      modal_analysis)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> sprung = constrain_model(beam, {}, [SpringSupport("tip", "uz", 1e9)])
+    >>> np.round(modal_analysis(sprung, 1).fn_hz, 1)
+    array([81.4])
     """
 
     def __new__(cls, node_set: str, dof: str, k: float, per_length: bool = False):

@@ -237,6 +237,25 @@ def load_vector(model: FEModel, case: str = "load") -> np.ndarray:
     Returns
     -------
     ndarray (n_dof,)
+
+    Examples
+    --------
+    Load set 7 of a Nastran deck: 1 N along z on the free end of the 2-mass chain
+    (springs of 1e5 N/m); statically the masses move ``F / k`` and ``2 F / k``:
+
+    >>> import pathlib, tempfile
+    >>> from mvtk.fe import read_nastran, static_solve
+    >>> deck = pathlib.Path(tempfile.mkdtemp()) / "chain.bdf"
+    >>> _ = deck.write_text("BEGIN BULK\\n"
+    ...                     "GRID,1,,0.,0.,0.\\nGRID,2,,0.1,0.,0.\\nGRID,3,,0.2,0.,0.\\n"
+    ...                     "CONM2,10,2,,1.0\\nCONM2,11,3,,1.0\\n"
+    ...                     "CELAS2,20,1.0e5,1,3,2,3\\nCELAS2,21,1.0e5,2,3,3,3\\n"
+    ...                     "SPC1,1,123456,1\\nSPC1,1,12456,2,3\\n"
+    ...                     "FORCE,7,3,,1.0,0.,0.,1.\\nENDDATA\\n")
+    >>> model = read_nastran(deck)
+    >>> f = load_vector(model, "7")
+    >>> f, static_solve(model, f) * 1e5          # N; m x 1e5
+    (array([0., 1.]), array([1., 2.]))
     """
     cases: dict[str, Any] = model.meta.get("load_cases") or {}
     if case not in cases:

@@ -265,6 +265,20 @@ def open_campaign(
         Invalid ``concat``, ``on_error`` or ``chunks``.
     mvtk.errors.MissingDependencyError
         dask is not installed.
+
+    Examples
+    --------
+    Two runs of the same test, opened lazily along a new ``record`` dimension:
+
+    >>> import pathlib, tempfile
+    >>> from mvtk.io import time_history, write
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> for run in ("run1", "run2"):
+    ...     _ = write(time_history(np.zeros((2, 1024)), 1024.0, ["acc1", "force"],
+    ...                            ["m/s^2", "N"]), folder / f"{run}.nc")
+    >>> campaign = open_campaign(str(folder / "*.nc"))
+    >>> dict(campaign.sizes)
+    {'channel': 2, 'time': 1024, 'record': 2}
     """
     dask = require_dask("open_campaign")
     import dask.array as dsa

@@ -108,6 +108,11 @@ def normalize_units(units: str) -> str:
     -------
     str
         Canonical unit string.
+
+    Examples
+    --------
+    >>> normalize_units("m/s2"), normalize_units("m/s**2"), normalize_units("µm")
+    ('m/s^2', 'm/s^2', 'um')
     """
     if not isinstance(units, str):
         raise UnitsError(f"units must be a string, got {type(units).__name__} {units!r}")
@@ -133,6 +138,11 @@ def infer_quantity(units: str) -> str:
     -------
     str
         One of :data:`QUANTITIES`.
+
+    Examples
+    --------
+    >>> infer_quantity("m/s^2"), infer_quantity("N"), infer_quantity("V")
+    ('acceleration', 'force', 'voltage')
     """
     for quantity, allowed in UNITS_BY_QUANTITY.items():
         if units in allowed and units != "1":
@@ -145,6 +155,11 @@ def fs_from_dt(dt: float) -> float:
 
     The rounding removes the last-bit noise of ``1 / dt`` when ``dt`` was itself written
     as a rounded decimal (``0.0333333333`` -> 30.0 Hz).
+
+    Examples
+    --------
+    >>> fs_from_dt(1 / 3000), fs_from_dt(0.001)
+    (3000.0, 1000.0)
     """
     dt = float(dt)
     if not np.isfinite(dt) or dt <= 0.0:
@@ -153,7 +168,13 @@ def fs_from_dt(dt: float) -> float:
 
 
 def time_axis(n: int, fs: float) -> np.ndarray:
-    """The mvtk time axis: ``np.arange(n) / fs`` in s (never a float ``arange`` with a step)."""
+    """The mvtk time axis: ``np.arange(n) / fs`` in s (never a float ``arange`` with a step).
+
+    Examples
+    --------
+    >>> time_axis(4, 1024.0)       # s
+    array([0.        , 0.00097656, 0.00195312, 0.00292969])
+    """
     return np.arange(int(n)) / float(fs)
 
 
@@ -213,6 +234,14 @@ def time_history(
     -------
     xarray.DataArray
         Validated time history named ``"time_history"`` with ``attrs["fs"]`` in Hz.
+
+    Examples
+    --------
+    Two channels sampled at 1024 Hz; the quantity follows from the unit:
+
+    >>> x = time_history(np.zeros((2, 1024)), 1024.0, ["acc1", "force"], ["m/s^2", "N"])
+    >>> x.dims, list(x.quantity.values), float(x.time[-1])
+    (('channel', 'time'), ['acceleration', 'force'], 0.9990234375)
     """
     from ._validate import validate
 

@@ -175,6 +175,15 @@ def validate(obj, *, source=None):
         sample.
     mvtk.errors.DimensionError
         A time history does not have dims ``("channel", "time")``.
+
+    Examples
+    --------
+    A valid time history is returned unchanged (calls can be chained):
+
+    >>> from mvtk.io import time_history
+    >>> x = time_history(np.zeros((1, 64)), 1024.0, ["acc1"], "m/s^2")
+    >>> validate(x) is x
+    True
     """
     if isinstance(obj, xr.DataArray):
         label = obj.name or "time history"

@@ -50,6 +50,17 @@ def write_modes_uff(modes: IdentifiedModes, path, *, shapes: str = "complex") ->
     ------
     ParameterError
         A DOF has no node or direction, or ``shapes`` is unknown.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> modes = modal.identify(h, 2.0, 110.0, refine=False)
+    >>> write_modes_uff(modes, pathlib.Path(tempfile.mkdtemp()) / "modes.uff").name
+    'modes.uff'
     """
     if shapes not in ("complex", "real"):
         raise ParameterError(f"shapes must be 'complex' or 'real', got {shapes!r}")
@@ -103,6 +114,19 @@ def write_frf_uff(frf, path) -> Path:
     ------
     FormatError
         The frequency lines are not uniformly spaced.
+
+    Examples
+    --------
+    Write the exact FRFs of the 2-mass chain and read them back:
+
+    >>> import tempfile, pathlib
+    >>> from mvtk import io, modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> path = write_frf_uff(h, pathlib.Path(tempfile.mkdtemp()) / "frf.uff")
+    >>> io.read(path)["frf"].shape
+    (2, 1, 480)
     """
     h = as_frf_matrix(frf)
     f = h["frequency"].values

@@ -143,6 +143,15 @@ def as_frf_matrix(obj, *, frf_type: str | None = None) -> xr.DataArray:
         The object does not have the three FRF dimensions.
     FormatError
         The frequencies are not ascending or the values not finite.
+
+    Examples
+    --------
+    >>> from mvtk.modal import exact_frf
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25), [0, 1], [0])
+    >>> m = as_frf_matrix(h)
+    >>> m.name, m.attrs["frf_type"], [str(r) for r in m.response.values]
+    ('frf', 'receptance', ['1+z', '2+z'])
     """
     if isinstance(obj, xr.Dataset) and "frf" not in obj.data_vars:
         obj = _channel_spectra_as_frf(obj)
@@ -255,6 +264,20 @@ def convert_frf(frf, to: str) -> xr.DataArray:
     ------
     UnitsError
         The FRF type is ``other`` (e.g. acceleration per volt) or ``to`` is unknown.
+
+    Examples
+    --------
+    Mobility = i w x receptance, line by line:
+
+    >>> from mvtk.modal import exact_frf
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> f = np.arange(0.0, 120.0, 0.25)
+    >>> h = exact_frf(np.eye(2), 0.5 * np.eye(2), K, f, [0, 1], [0])
+    >>> v = convert_frf(h, "mobility")
+    >>> v.attrs["frf_type"], str(v.units.values[0])
+    ('mobility', 'm/s/N')
+    >>> complex(v[0, 0, 40] / (1j * 2 * np.pi * f[40] * h[0, 0, 40]))
+    (1+0j)
     """
     h = as_frf_matrix(frf)
     src = h.attrs["frf_type"]
@@ -297,6 +320,16 @@ def reciprocal(frf) -> xr.DataArray:
 
     A roving-hammer test (one sensor, hammer at every test point) gives a 1 x N matrix;
     its reciprocal is the N x 1 matrix whose response side carries the mode shapes.
+
+    Examples
+    --------
+    A roving-hammer row (1 x 2) becomes a column (2 x 1):
+
+    >>> from mvtk.modal import exact_frf
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25), [0], [0, 1])
+    >>> h.shape, reciprocal(h).shape
+    ((1, 2, 480), (2, 1, 480))
     """
     h = as_frf_matrix(frf)
     vals = np.swapaxes(h.values, 0, 1)
@@ -433,6 +466,17 @@ def frf_matrix(
         message lists them): every response must be measured with every reference.
     DoubleHitError
         Every set was refused for double hits.
+
+    Examples
+    --------
+    Three simulated hammer hits (modes at 20 and 55 Hz), one sensor:
+
+    >>> from mvtk import testing
+    >>> hits = testing.impact_test([20.0, 55.0], [0.01, 0.02], 256.0, 4.0, 3,
+    ...                            np.random.default_rng(0))   # 256 Hz, 4 s per hit
+    >>> h = frf_matrix([hits], reference="force")
+    >>> h.dims, h.shape[:2]
+    (('response', 'reference', 'frequency'), (1, 1))
     """
     if isinstance(sets, (xr.DataArray, xr.Dataset)):
         sets = [sets]
@@ -674,6 +718,18 @@ def frf_of_sets(sets, reference=None, response=None, *, excitation: str = "auto"
     xarray.DataArray
         As :func:`frf_matrix`, with ``attrs["reciprocity"]`` saying whether and why the
         matrix was turned (``""`` if not).
+
+    Examples
+    --------
+    The force channels are found as references; one response, one reference, so no
+    reciprocity turn:
+
+    >>> from mvtk import testing
+    >>> hits = testing.impact_test([20.0, 55.0], [0.01, 0.02], 256.0, 4.0, 3,
+    ...                            np.random.default_rng(0))   # 256 Hz, 4 s per hit
+    >>> h = frf_of_sets([hits])
+    >>> h.shape[:2], h.attrs["reciprocity"]
+    ((1, 1), '')
     """
     ref = reference if reference is not None else {"quantity": "force"}
     frf = frf_matrix(sets, ref, response, excitation=excitation, **frf_options)
@@ -710,6 +766,19 @@ def merge_frf(mats, names=None) -> xr.DataArray:
         Different frequency lines, or the grid misses pairs (listed).
     UnitsError
         The matrices are of different FRF types (convert them first, :func:`convert_frf`).
+
+    Examples
+    --------
+    Two files, one per reference (force on mass 1, then on mass 2), make a 2 x 2 matrix:
+
+    >>> from mvtk.modal import exact_frf
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> f = np.arange(0.25, 120.0, 0.25)
+    >>> h1 = exact_frf(np.eye(2), 0.5 * np.eye(2), K, f, [0, 1], [0])
+    >>> h2 = exact_frf(np.eye(2), 0.5 * np.eye(2), K, f, [0, 1], [1])
+    >>> m = merge_frf([h1, h2], names=["ref1.uff", "ref2.uff"])
+    >>> m.shape, [str(r) for r in m.reference.values]
+    ((2, 2, 479), ['1+z', '2+z'])
     """
     hs = [as_frf_matrix(m) for m in mats]
     names = list(names) if names is not None else [f"matrix {k + 1}" for k in range(len(hs))]

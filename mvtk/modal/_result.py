@@ -80,6 +80,18 @@ class IdentifiedModes:
         Pintelon & De Roeck 2008; Döhler & Mevel 2013); NaN where not computed.
     shape_std : xarray.DataArray or None
         Standard deviation of each shape component, dims of :attr:`shapes`.
+
+    Examples
+    --------
+    Returned by :func:`mvtk.modal.identify`; ``to_dataframe`` is the quality table:
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> modes = modal.identify(h, 2.0, 110.0)
+    >>> modes.to_dataframe()[["fn_hz", "zeta"]].round({"fn_hz": 3, "zeta": 5}).values.tolist()
+    [[31.105, 0.00128], [81.434, 0.00049]]
     """
 
     method: str

@@ -233,6 +233,19 @@ def ssi_cov(
     output-only modal analysis", MSSP 13(6) 1999.
     Rainieri & Fabbrocino, "Operational Modal Analysis of Civil Engineering
     Structures", Springer 2014, ch. 4 (number of block rows).
+
+    Examples
+    --------
+    Two minutes of the response of two modes (20 Hz at 1 %, 55 Hz at 2 %) to white
+    noise, response channel only (no force):
+
+    >>> from mvtk import testing
+    >>> x = testing.random_excitation_test([20.0, 55.0], [0.01, 0.02], 256.0, 120.0,
+    ...                                    np.random.default_rng(0))
+    >>> diagram = ssi_cov(x.sel(channel=["response"]), 5.0, 100.0, orders=range(2, 21, 2))
+    >>> sel = select_poles(diagram)
+    >>> np.round(np.abs(sel.pole) / (2 * np.pi), 1)
+    array([20. , 55.1])
     """
     return _ssi_cov(x, fmin, fmax, orders, reference=reference, n_lags=n_lags, fs=fs,
                     criteria=criteria)[0]
@@ -399,6 +412,18 @@ def identify_output_only(
     from stochastic subspace identification", MSSP 22(4) 948-969, 2008.
     Döhler & Mevel, "Efficient multi-order uncertainty computation for stochastic
     subspace identification", MSSP 40(2) 464-484, 2013.
+
+    Examples
+    --------
+    The ambient response of two modes (20 Hz at 1 %, 55 Hz at 2 %), 2 min at 256 Hz:
+
+    >>> from mvtk import testing
+    >>> x = testing.random_excitation_test([20.0, 55.0], [0.01, 0.02], 256.0, 120.0,
+    ...                                    np.random.default_rng(0))
+    >>> modes = identify_output_only(x.sel(channel=["response"]), 5.0, 100.0,
+    ...                              orders=range(2, 21, 2))
+    >>> modes.method, np.round(modes.fn_hz, 1)
+    ('SSI-cov', array([20. , 55.1]))
     """
     from .. import signal
 

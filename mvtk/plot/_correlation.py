@@ -45,6 +45,14 @@ def plot_mac(mac: Any, *, title: str = "MAC", annotate: bool = True):
     title : str
     annotate : bool
         Write the values >= 0.1 in the cells (where they are readable).
+
+    Examples
+    --------
+    >>> import xarray as xr
+    >>> mac = xr.DataArray([[1.0, 0.07], [0.07, 1.0]], dims=("mode_a", "mode_b"))
+    >>> fig = plot_mac(mac, title="AutoMAC")
+    >>> len(fig.axes)            # the matrix and its colour bar
+    2
     """
     dims = getattr(mac, "dims", None)
     if dims is None or len(dims) != 2:
@@ -160,6 +168,25 @@ def plot_paired_shapes(geometry: Any, test: Any, fe: Any, pairing: Any, *, max_p
     matplotlib.figure.Figure
         Two axes: the grid of ``2 n_pairs`` panels (one scatter of all panels' nodes,
         values in row order test, FE; panel titles as annotations) and the colorbar.
+
+    Examples
+    --------
+    Test shapes (here the FE shapes scaled by -2) next to the paired FE shapes:
+
+    >>> from mvtk.correlation import correlate, read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, modal_analysis, plate_model
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> plate = plate_model(0.3, 0.2, [Ply(steel, 2e-3)], nx=6, ny=4, clamp="x0")
+    >>> pts = [(3 * j + i + 1, 0.1 * (i + 1), 0.1 * j) for j in range(3) for i in range(3)]
+    >>> geo = read_test_geometry({"nodes": [{"node": n, "x": x, "y": y, "z": 0.0}
+    ...                                     for n, x, y in pts],
+    ...                           "sensors": [{"node": n, "direction": "+z"} for n, _, _ in pts]})
+    >>> fe = modal_analysis(plate, 2)
+    >>> pre = correlate(geo, plate, fe)
+    >>> res = correlate(geo, plate, fe, test=-2.0 * pre.fe)
+    >>> fig = plot_paired_shapes(geo, res.test, res.fe, res.pairing)
+    >>> len(fig.axes) >= 1
+    True
     """
     from matplotlib.collections import LineCollection
 
@@ -277,6 +304,22 @@ def plot_test_on_mesh(model: Any, geometry: Any, *, mapping: Any = None):
     geometry : TestGeometry
     mapping : DofMapping, optional
         Sensors off their nearest FE node by more than a tenth of ``tol`` are ringed.
+
+    Examples
+    --------
+    A plate mesh with three sensors along its centre line:
+
+    >>> from mvtk.correlation import read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, plate_model
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> plate = plate_model(0.3, 0.2, [Ply(steel, 2e-3)], nx=6, ny=4, clamp="x0")
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.1, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)],
+    ...                           "lines": [{"nodes": [1, 2, 3]}]})
+    >>> fig = plot_test_on_mesh(plate, geo)
+    >>> fig.axes[0].get_aspect()
+    1.0
     """
     from matplotlib.collections import LineCollection
 

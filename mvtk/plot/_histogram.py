@@ -54,6 +54,18 @@ def plot_fn_histogram(result, modes=None, bins: int = 30):
         An Agg-backed figure (no pyplot state); each panel marks the mean and the 5 %
         and 95 % percentiles. Save it with ``fig.savefig`` or
         :func:`mvtk.plot.figure_to_png`.
+
+    Examples
+    --------
+    Any object with an ``fn_hz`` array (n_samples, n_modes) in Hz, e.g. a Monte Carlo
+    result:
+
+    >>> import types
+    >>> rng = np.random.default_rng(0)
+    >>> result = types.SimpleNamespace(fn_hz=rng.normal([10.0, 30.0], [0.1, 0.3], (200, 2)))
+    >>> fig = plot_fn_histogram(result)
+    >>> len([ax for ax in fig.axes if ax.get_visible()])
+    2
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 

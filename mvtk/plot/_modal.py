@@ -32,6 +32,18 @@ def plot_stabilisation(diagram, modes=None, *, title: str = ""):
 
     The indicator (CMIF singular values for pLSCF, singular values of the output PSD
     matrix for SSI-cov, in dB) is drawn on a second axis behind the poles.
+
+    Examples
+    --------
+    The stabilisation diagram of the exact FRFs of a 2-mass chain (31.1 and 81.4 Hz):
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> fig = plot_stabilisation(modal.plscf(h, 2.0, 110.0, orders=range(2, 21)))
+    >>> fig.axes[0].get_xlabel()
+    'frequency [Hz]'
     """
     g = STAB_LAYOUT
     width, height = FIG_WIDTH, g["height"]
@@ -101,6 +113,18 @@ def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 
         Response labels or positions (default: the first ``max_curves``).
     reference : str or int
         Reference label or position.
+
+    Examples
+    --------
+    Measured (exact) and synthesised FRFs of the 2-mass chain, magnitude and phase:
+
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> fig = plot_frf_synthesis(modal.identify(h, 2.0, 110.0, refine=False))
+    >>> len(fig.axes)
+    2
     """
     from matplotlib.lines import Line2D
 
@@ -157,7 +181,18 @@ def plot_frf_synthesis(modes, responses=None, reference=0, *, max_curves: int = 
 
 
 def plot_automac(modes, *, real: bool = False, title: str = ""):
-    """AutoMAC matrix of the identified shapes with the values written in the cells."""
+    """AutoMAC matrix of the identified shapes with the values written in the cells.
+
+    Examples
+    --------
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> fig = plot_automac(modal.identify(h, 2.0, 110.0, refine=False))
+    >>> len(fig.axes)
+    2
+    """
     m = modes.automac(real=real).values
     fig = _figure(5.0, 4.2)
     ax = fig.add_subplot()

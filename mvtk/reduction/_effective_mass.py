@@ -32,6 +32,18 @@ class EffectiveMassTable:
     kind : str
         ``"fixed_base"`` (modes of the model with its supports) or
         ``"fixed_interface"`` (Craig-Bampton interior modes).
+
+    Examples
+    --------
+    Returned by :func:`effective_mass`; the effective masses add up to at most the moving
+    mass:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> t = effective_mass(beam, "uz", n_modes=6)
+    >>> t.direction, bool(t.effective_mass_kg.sum() <= t.total_mass_kg)
+    ('uz', True)
     """
 
     fn_hz: np.ndarray
@@ -138,6 +150,18 @@ def effective_mass(
     ``r' M r`` (mass on constrained DOFs is not counted). Over all modes of a supported
     model the fractions sum to 1; for fixed-interface modes they sum to less than 1 (the
     rest is the boundary's residual mass).
+
+    Examples
+    --------
+    The first bending mode of a uniform cantilever carries 61.3 % of its mass
+    (Euler-Bernoulli closed form); here ``rho A L`` = 0.0942 kg:
+
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(steel, 2e-3)], n_elements=20)
+    >>> table = effective_mass(beam, "uz", n_modes=6)
+    >>> round(float(table.effective_mass_kg[0]) / (7850.0 * 0.02 * 0.002 * 0.3), 3)
+    0.613
     """
     if modes is not None and (base is not None or not isinstance(model_or_se, FEModel)):
         raise ParameterError("modes= applies to an FEModel without base=")

@@ -127,6 +127,34 @@ def with_electrodes(se: SuperElement, coupling: PiezoCoupling, *, inertia_order:
         non-negative integer, or an electrode's static shape is already in the span of
         the basis (then nothing is added for it: the message says which; this only
         happens for a patch on the boundary DOFs alone).
+
+    Examples
+    --------
+    The piezo plate of :func:`mvtk.fe.piezo_coupling` reduced to its tip-centre node and
+    4 fixed-interface modes: the electrode's static shape adds one coordinate, and the
+    default block of inertia vectors at most ``n_boundary + n_electrodes`` = 7 more:
+
+    >>> from mvtk.fe import (IsotropicMaterial, Laminate, Patch, PiezoMaterial, Ply,
+    ...                      ShellPiezoPatch, assemble_shell_model, edge_dofs,
+    ...                      rectangular_plate_mesh)
+    >>> steel = IsotropicMaterial("steel", 2.1e11, 0.3, 7850.0)
+    >>> pzt = PiezoMaterial("PIC151", 6.7e10, 0.34, 7800.0, d31=-2.1e-10, eps33=2.1e-8)
+    >>> mesh = rectangular_plate_mesh(0.3, 0.2, nx=6, ny=4,
+    ...                               patches=[Patch("act", 0.05, 0.15, 0.05, 0.15)])
+    >>> base = Laminate((Ply(steel, 1e-3),))
+    >>> stack = Laminate((Ply(steel, 1e-3), Ply(pzt, 2e-4)), z_bottom=-0.5e-3)
+    >>> model = assemble_shell_model(mesh.nodes, mesh.elements, mesh.element_region,
+    ...                              [base, stack], fixed_dofs=edge_dofs(mesh, "x0", "clamped"))
+    >>> patch = ShellPiezoPatch("act", mesh.elements[mesh.element_region == 1], stack)
+    >>> from mvtk.fe import piezo_coupling
+    >>> from mvtk.reduction import craig_bampton
+    >>> se = craig_bampton(model, [model.nearest_node([0.3, 0.1, 0.0])], n_modes=4)
+    >>> coupling = piezo_coupling(model, [patch])
+    >>> se_v, B_r = with_electrodes(se, coupling)
+    >>> se.K.shape, se_v.K.shape, B_r.shape, se_v.labels[10:12]
+    ((10, 10), (18, 18), (18, 1), ('v:act', 'r1:0'))
+    >>> with_electrodes(se, coupling, inertia_order=0)[0].K.shape   # static shape only
+    (11, 11)
     """
     model = se.model
     B = np.asarray(coupling.B, dtype=float)

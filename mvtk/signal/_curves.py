@@ -21,6 +21,15 @@ class AmplitudeCurves:
     """Amplitude (never power) curves on a common frequency axis.
 
     ``amplitude`` has shape (n_curves, n_freq): ``|H|`` of an FRF or ``sqrt(PSD)``.
+
+    Examples
+    --------
+    Returned by :func:`amplitude_curves`: one row of ``|H|`` per response/reference pair:
+
+    >>> from mvtk import testing
+    >>> c = amplitude_curves(testing.modal_frf(np.arange(0.0, 100.0, 0.125), 20.0, 0.01))
+    >>> c.amplitude.shape, c.labels
+    ((1, 800), ('response/force',))
     """
 
     f_hz: np.ndarray
@@ -67,6 +76,20 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
         Default: from ``attrs["spectrum"]`` for xarray input, False for numpy input.
     kind : {"auto", "receptance", "mobility", "accelerance"}
         FRF type; ``"auto"`` reads ``attrs["kind"]`` or the response ``quantity``.
+
+    Examples
+    --------
+    At resonance the receptance of a mode with unit modal constant is
+    ``1 / (2 zeta w_n**2)`` (m/N):
+
+    >>> from mvtk import testing
+    >>> h = testing.modal_frf(np.arange(0.0, 100.0, 0.125), 20.0, 0.01)
+    >>> c = amplitude_curves(h)
+    >>> c.amplitude.shape, c.kinds
+    ((1, 800), ('receptance',))
+    >>> i = int(np.argmin(np.abs(c.f_hz - 20.0)))
+    >>> round(float(c.amplitude[0, i]) * 2 * 0.01 * (2 * np.pi * 20.0) ** 2, 3)
+    1.0
     """
     if kind not in ("auto", "receptance", "mobility", "accelerance"):
         raise ParameterError(

@@ -16,6 +16,15 @@ def as_time_history(x, *, name: str = "x") -> xr.DataArray:
     Accepts a DataArray with dims ``("channel", "time")`` (any order) or ``("time",)``,
     or an ``xarray.Dataset`` holding a ``"time_history"`` variable (the output of
     ``mvtk.io.read``).
+
+    Examples
+    --------
+    A single channel with dims ``("time",)`` becomes one row of ``("channel", "time")``:
+
+    >>> from mvtk import testing
+    >>> x = testing.sdof_free_decay(12.0, 0.01, 256.0, 2.0).isel(channel=0)
+    >>> as_time_history(x).dims
+    ('channel', 'time')
     """
     if isinstance(x, xr.Dataset):
         if "time_history" not in x.data_vars:
@@ -60,6 +69,13 @@ def sampling_rate(x: xr.DataArray, fs: float | None = None, *, name: str = "x") 
     """Sampling rate in Hz derived from the ``time`` coordinate (uniform sampling required).
 
     If ``fs`` is also given it must agree with the coordinate to 1e-6 relative.
+
+    Examples
+    --------
+    >>> from mvtk import testing
+    >>> x = testing.sdof_free_decay(12.0, 0.01, 256.0, 2.0)
+    >>> sampling_rate(x)
+    256.0
     """
     t = np.asarray(x["time"].values, dtype=float)
     if t.size < 2:

@@ -123,6 +123,16 @@ class FrequencyTarget:
         Sensor DOFs of ``shape`` (empty without a shape).
     shape_values : ndarray or None
         Shape values in the order of ``sensors``.
+
+    Examples
+    --------
+    A measured 116 Hz mode with its shape at three nodes (uz), and one without a shape:
+
+    >>> t1 = FrequencyTarget(116.0, shape={"nodes": [7, 14, 20], "components": "uz",
+    ...                                    "values": [-0.5, -0.3, 0.9]})
+    >>> t2 = FrequencyTarget(18.6, weight=2.0, label="first bending")
+    >>> t1.fn_hz, t2.label
+    (116.0, 'first bending')
     """
 
     fn_hz: float
@@ -261,6 +271,12 @@ def targets_from_modal_result(
     Returns
     -------
     list of FrequencyTarget
+
+    Examples
+    --------
+    >>> targets = targets_from_modal_result({"fn_hz": [18.6, 116.0]})
+    >>> [t.fn_hz for t in targets]
+    [18.6, 116.0]
     """
     fn = _fn_values(result)
     if fn.size == 0:
@@ -320,6 +336,22 @@ def targets_from_shapes(
     Returns
     -------
     list of FrequencyTarget
+
+    Examples
+    --------
+    Targets with shapes from the (here: FE) shapes at three sensors of a cantilever:
+
+    >>> from mvtk.correlation import correlate, read_test_geometry
+    >>> from mvtk.fe import IsotropicMaterial, Ply, cantilever_beam, modal_analysis
+    >>> beam = cantilever_beam(0.3, 0.02, [Ply(IsotropicMaterial("steel", 2.1e11, 0.3,
+    ...                                                          7850.0), 2e-3)])
+    >>> geo = read_test_geometry({"nodes": [{"node": i, "x": 0.1 * i, "y": 0.0, "z": 0.0}
+    ...                                     for i in (1, 2, 3)],
+    ...                           "sensors": [{"node": i, "direction": "+z"} for i in (1, 2, 3)]})
+    >>> c = correlate(geo, beam, modal_analysis(beam, 2))
+    >>> targets = targets_from_shapes(c.fe, c.mapping)
+    >>> [round(t.fn_hz, 1) for t in targets]
+    [18.6, 116.3]
     """
     import xarray as xr
 

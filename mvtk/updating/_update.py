@@ -83,6 +83,20 @@ class HistoryEntry:
     model : {"full", "reduced"}
         ``"reduced"``: Ritz values of the reduced-basis inner loop (see ``update``'s
         ``reduced_basis``), not eigenvalues of the full model.
+
+    Examples
+    --------
+    One entry per model evaluation in ``UpdateResult.history``:
+
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> res = update(beam, ["materials.steel.E"], [19.0], n_modes=2)
+    >>> first = res.history[0]
+    >>> first.evaluation, first.model, round(float(first.fn_hz[0]), 2)
+    (1, 'full', 18.57)
     """
 
     evaluation: int
@@ -772,6 +786,19 @@ class UpdateResult:
     residual_limits_hz : ndarray or None, shape (n_targets, 2)
         The verdicts' thresholds: twice the residual standard deviation from the
         identification alone and with the model-form term, Hz.
+
+    Examples
+    --------
+    Returned by :func:`update`; ``to_dataframe`` lists the targets before and after:
+
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> res = update(beam, ["materials.steel.E"], [19.0], n_modes=2)
+    >>> res.success, res.to_dataframe()[["target_hz", "updated_hz"]].round(3).values.tolist()
+    (True, [[19.0, 19.0]])
     """
 
     description: dict
@@ -1243,6 +1270,24 @@ def update(
     something no updated value can supply); ``s_tot`` below 1e-3 of the target's own
     standard deviation (as many free parameters as the targets they fit):
     ``"no redundancy"``; no standard deviation at all: ``"no std"``.
+
+    Examples
+    --------
+    Young's modulus of a steel cantilever (300 x 20 x 2 mm) updated to a measured first
+    frequency 10 % stiffer than the model's (f ~ sqrt(E), so E must grow by 10 %):
+
+    >>> from mvtk.fe import build_model, modal_analysis
+    >>> beam = {"name": "beam",
+    ...         "materials": {"steel": {"E": 2.1e11, "nu": 0.3, "rho": 7850.0}},
+    ...         "structure": {"type": "beam", "length": 0.3, "width": 0.02,
+    ...                       "layers": [{"material": "steel", "thickness": 2e-3}]},
+    ...         "mesh": {"n_elements": 20}, "boundary": {"clamp": "x0"}}
+    >>> f1 = modal_analysis(build_model(beam), 1).fn_hz[0]            # 18.566 Hz
+    >>> res = update(beam, ["materials.steel.E"], [f1 * np.sqrt(1.1)], n_modes=2)
+    >>> round(float(res.values[0]) / 2.1e11, 4)
+    1.1
+    >>> round(res.description["materials"]["steel"]["E"] / 1e9, 3)     # GPa
+    231.0
     """
     from scipy.optimize import least_squares
 
