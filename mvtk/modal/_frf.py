@@ -587,6 +587,15 @@ def frf_matrix(
                      df_hz=float(f0[1] - f0[0]), set_quality=quality.to_json())
     if policy is not None:
         out.attrs["window_policy"] = policy.reason
+    # the band every set excites and the coarsest resolution: the default analysis band
+    # of mvtk.modal.identify starts from them (mvtk.signal.analysis_band)
+    bands = [p[2].get("excitation_band_hz") for p in parts]
+    if all(b is not None and len(b) == 2 for b in bands):
+        out.attrs["excitation_band_hz"] = [max(float(b[0]) for b in bands),
+                                           min(float(b[1]) for b in bands)]
+    res = [p[2].get("resolution_hz") for p in parts]
+    if all(r is not None for r in res):
+        out.attrs["resolution_hz"] = max(float(r) for r in res)
     taus = {float(p[2]["exponential_window_tau_s"]) for p in parts
             if "exponential_window_tau_s" in p[2]}
     if len(taus) == 1 and len(parts) == sum("exponential_window_tau_s" in p[2]
