@@ -182,7 +182,7 @@ def find_peaks(
         raise ParameterError(f"prominence_db must be >= 0 dB, got {prominence_db!r}")
     f = curves.f_hz
     if fmin is None or fmax is None:
-        lo, hi, _ = excited_band(spectrum, curves)
+        lo, hi, _ = _excited_band(spectrum, curves)
         fmin = lo if fmin is None else fmin
         fmax = hi if fmax is None else fmax
     band = curves.attrs.get("excitation_band_hz")
