@@ -304,10 +304,15 @@ def identify(
         FRF matrix ``("response", "reference", "frequency")`` (conventions page), e.g.
         from :func:`frf_matrix` or :func:`mvtk.io.read` on UFF 58 records.
     fmin, fmax : float, optional
-        Analysis band in Hz (default: the whole FRF).
+        Analysis band in Hz. Default (each bound not given): from the data,
+        :func:`default_band` / :func:`mvtk.signal.analysis_band`: the lines the
+        excitation covers (a sweep's swept band; the force within
+        :data:`mvtk.signal.EXCITED_DB` of its maximum, 35 dB for a hammer; from 5 x the
+        resolution) trimmed to the resonance peaks there / x 1.25; the band and why are
+        ``result.band_hz`` and ``result.band_reason`` (peaks it leaves out or cuts named).
     orders : iterable of int, optional
         pLSCF model orders. Default :func:`default_orders`, chosen from the data:
-        ``2..p_max`` with ``p_max = ceil(6 n_peaks / n_reference)`` (``n_peaks``: peaks
+        ``2..p_max`` with ``p_max = ceil(8 n_peaks / n_reference)`` (``n_peaks``: peaks
         of the smoothed sum-FRF in the band, :func:`count_peaks`; every order gives
         ``n_reference`` poles), at least ``max(20, 64 // n_reference)``, at most 160
         poles per order and one pole per 200 lines of the band. The orders used are

@@ -148,13 +148,13 @@ def find_peaks(
     n_peaks : int, optional
         Keep the most prominent ``n_peaks`` peaks (overrides ``max_peaks``).
     fmin, fmax : float, optional
-        Frequency band in Hz searched for peaks. Default ``fmax`` for an impact FRF from
-        :func:`mvtk.signal.frf`: the top of its ``excitation_band_hz`` (the force
-        spectrum has dropped by 20 dB there; above it the FRF is noise over no input).
-        For a swept-sine FRF the band also sets the default ``fmin`` (its bottom).
-        Default ``fmin`` when the input states ``resolution_hz`` (FRFs from
-        :func:`mvtk.signal.frf`): 5 x that resolution (a mode needs 5 cycles in the
-        record; below it drift and offsets make peaks).
+        Frequency band in Hz searched for peaks. Default: the band the excitation covers,
+        :func:`excited_band` (a sweep's swept band; with the FRF's per-line force level
+        the lines within :data:`EXCITED_DB` of its maximum, 35 dB for a hammer, above it
+        the FRF is noise over no input; else a stated ``excitation_band_hz``), from
+        5 x the stated ``resolution_hz`` (a mode needs 5 cycles in the record; below it
+        drift and offsets make peaks). A stated ``excitation_band_hz`` that starts above
+        0 Hz (a sweep) also bounds a given ``fmin``.
     prominence_db : float
         Minimum prominence in dB (default 6 dB).
     noise_factor : float
