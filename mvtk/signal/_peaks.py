@@ -460,8 +460,8 @@ def analysis_band(spectrum, f_hz=None, *, power: bool | None = None, coherence=N
     spectrum, f_hz, power
         As in :func:`find_peaks`.
     coherence : array_like, optional
-        Coherence on the same lines; default the FRF's ``coherence`` (variable or
-        coordinate).
+        Coherence on the same lines; default the FRF's ``coherence`` (Dataset variable
+        or DataArray coordinate, as :func:`mvtk.modal.frf_matrix` attaches it).
     min_coherence : float
         Peaks with a lower mean coherence do not count as resonances.
     margin : float
@@ -485,6 +485,8 @@ def analysis_band(spectrum, f_hz=None, *, power: bool | None = None, coherence=N
     >>> round(b.fmin_hz, 1), round(b.fmax_hz, 1)
     (32.0, 100.0)
     """
+    import xarray as xr
+
     if not margin > 1:
         raise ParameterError(f"margin must be > 1, got {margin!r}")
     curves = amplitude_curves(spectrum, f_hz, power=power)
@@ -493,6 +495,10 @@ def analysis_band(spectrum, f_hz=None, *, power: bool | None = None, coherence=N
     if hi <= lo:
         raise ParameterError(f"analysis_band: the excited band {lo:g}..{hi:g} Hz is empty "
                              f"({'; '.join(why)})")
+    if (coherence is None and isinstance(spectrum, xr.DataArray)
+            and "coherence" in spectrum.coords
+            and "frequency" in spectrum.coords["coherence"].dims):
+        coherence = spectrum.coords["coherence"].transpose(..., "frequency")
     coh = _coherence(spectrum, coherence, f.size)
     big = max(f.size, 1)
     inside = _pick(curves, coh, lo, hi, min_coherence=min_coherence, max_peaks=big,

@@ -127,6 +127,20 @@ def test_impact_band_stops_where_the_force_is_35_db_down():
         < 875
 
 
+def test_incoherent_peaks_do_not_widen_the_band():
+    # a 900 Hz peak where the coherence is 0.2 (noise over no input) is no resonance:
+    # the band stops x1.25 above the coherent 300 Hz mode
+    f = np.arange(0, 1000.0, 0.25)
+    da = _single([100.0, 300.0, 900.0], f)
+    coh = np.where(f > 700, 0.2, 0.99)
+    b = signal.analysis_band(da.assign_coords(
+        coherence=(("response", "reference", "frequency"), coh[None, None])))
+    assert b.fmax_hz == pytest.approx(375.0, rel=1e-3)
+    assert b.left_out_hz.size == 0      # incoherent: not a spectral peak at all
+    # without the coherence the 900 Hz peak is a resonance and the band reaches it
+    assert signal.analysis_band(da).fmax_hz > 900
+
+
 def test_analysis_band_refuses_a_bad_margin():
     from mvtk.errors import ParameterError
 
