@@ -100,14 +100,17 @@ def _check_orders(h, args) -> None:
 
     if args.orders is None:
         return
+    from ..modal._identify import default_band
+
     f = h["frequency"].values
-    lo = -float("inf") if args.fmin is None else args.fmin
-    hi = float("inf") if args.fmax is None else args.fmax
+    # the band identify will fit: the bounds given, the rest from the data
+    lo, hi, _ = default_band(h, args.fmin, args.fmax)
     lines = int(((f >= lo) & (f <= hi)).sum())
     ni = h.sizes["reference"]
     most = min(lines // (2 * ni), MAX_POLES_PER_ORDER // ni)
     if args.orders > most:
-        why = (f"the band holds {lines} lines for {ni} reference(s) and pLSCF needs at "
+        why = (f"the band {lo:.5g}..{hi:.5g} Hz holds {lines} lines for {ni} reference(s) "
+               "and pLSCF needs at "
                "least 2 lines per pole" if lines // (2 * ni) <= MAX_POLES_PER_ORDER // ni
                else f"above {MAX_POLES_PER_ORDER} poles per order the stabilisation "
                "diagram takes many minutes to hours (without --orders the order is "

@@ -423,14 +423,20 @@ class AnalysisBand:
 def _name_peaks(fpk, level, f, limit=6) -> str:
     """``"11928 Hz (force -41 dB), ..."``, the first ``limit`` and how many more."""
     parts = []
-    for x in fpk[:limit]:
+    named: list[float] = []
+    for x in fpk:
+        if len(named) >= limit:
+            break
+        if any(abs(x - y) <= 0.01 * y for y in named):
+            continue            # a cluster of noise peaks: its strongest named once
+        named.append(float(x))
         txt = f"{x:.5g} Hz"
         if level is not None:
             k = int(np.argmin(np.abs(f - x)))
             if np.isfinite(level[k]):
                 txt += f" (excitation {level[k]:.0f} dB)"
         parts.append(txt)
-    more = len(fpk) - limit
+    more = len(fpk) - len(named)
     return ", ".join(parts) + (f" and {more} more" if more > 0 else "")
 
 

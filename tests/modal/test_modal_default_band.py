@@ -15,6 +15,7 @@ The LVM hammer tests with defaults are in ``test_modal_default_orders.py``.
 
 from __future__ import annotations
 
+import json
 import re
 
 import numpy as np
@@ -180,3 +181,10 @@ def test_view0_swept_sine_defaults(modal_data, capsys):
     assert cli.run(args) == 0
     out = capsys.readouterr().out
     assert "band: from the data: swept band" in out
+    args = p.parse_args(["modal", str(modal_data / "hdf5" / "view_0.hdf5"), "--units", "N",
+                         "m/s^2", "V", "--quantity", "force", "acceleration", "voltage",
+                         "--fmax", "400", "--json"])
+    assert cli.run(args) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["band_hz"][1] == 400.0 and 60 < out["band_hz"][0] < 63
+    assert out["band_reason"].startswith("fmax 400 Hz given; from the data: swept band")
