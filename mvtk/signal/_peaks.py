@@ -231,11 +231,13 @@ def _pick(curves, coh, fmin, fmax, *, n_peaks=None, prominence_db=6.0, noise_fac
     idx, props = scipy.signal.find_peaks(db, prominence=float(prominence_db))
     prom = props["prominences"]
     ok = prom >= noise_factor * local[idx]
-    if idx.size:
-        ok &= db[idx] >= db[idx].max() - float(dynamic_range_db)
-    idx, prom = idx[ok], prom[ok]
     if coh is not None and idx.size:
-        ok = coh[idx + lo] >= min_coherence
+        # before the dynamic range: an incoherent spike (H1 over a dip of the force)
+        # must not set the level the modes are measured against
+        ok &= coh[idx + lo] >= min_coherence
+    idx, prom = idx[ok], prom[ok]
+    if idx.size:
+        ok = db[idx] >= db[idx].max() - float(dynamic_range_db)
         idx, prom = idx[ok], prom[ok]
     # one row per physical peak: drop peaks inside the -3 dB band of a stronger one
     order = np.argsort(prom)[::-1]

@@ -142,6 +142,19 @@ def test_incoherent_peaks_do_not_widen_the_band():
     assert signal.analysis_band(da).fmax_hz > 900
 
 
+def test_an_incoherent_spike_does_not_hide_the_modes():
+    # an H1 spike 97 dB above the modes where the coherence is 0.3 (a dip of the force
+    # in a hammer's excited band) used to set the 60 dB dynamic range and hide the modes
+    f = np.arange(0, 1000.0, 0.25)
+    da = _single([100.0, 300.0], f)
+    v = da.values.copy()
+    v[..., 3200] *= 1e8
+    coh = np.where(np.abs(f - 800) < 2, 0.3, 0.99)
+    ds = xr.Dataset({"frf": da.copy(data=v),
+                     "coherence": (("response", "reference", "frequency"), coh[None, None])})
+    np.testing.assert_allclose(signal.find_peaks(ds).fn_hz, [100.0, 300.0], atol=0.1)
+
+
 def test_analysis_band_refuses_a_bad_margin():
     from mvtk.errors import ParameterError
 
