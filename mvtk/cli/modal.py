@@ -31,8 +31,11 @@ def add_parser(subparsers) -> None:
         "table with quality columns (stability count, MPC, MPD, reliable, reason).",
     )
     p.add_argument("files", nargs="+", metavar="FILE", help="measurement file(s)")
-    p.add_argument("--fmin", type=float, default=None, help="band start in Hz")
-    p.add_argument("--fmax", type=float, default=None, help="band end in Hz")
+    p.add_argument("--fmin", type=float, default=None, help="band start in Hz (default: "
+                   "from the data, where the excitation is strong and the response has "
+                   "resonances; the reason is printed)")
+    p.add_argument("--fmax", type=float, default=None, help="band end in Hz (default: "
+                   "from the data)")
     p.add_argument("--orders", type=int, default=None, metavar="N",
                    help="highest model order (pLSCF polynomial order / SSI state order); "
                    "pLSCF default: from the number of peaks in the band (see "
@@ -97,14 +100,17 @@ def _check_orders(h, args) -> None:
 
     if args.orders is None:
         return
+    from ..modal._identify import default_band
+
     f = h["frequency"].values
-    lo = -float("inf") if args.fmin is None else args.fmin
-    hi = float("inf") if args.fmax is None else args.fmax
+    # the band identify will fit: the bounds given, the rest from the data
+    lo, hi, _ = default_band(h, args.fmin, args.fmax)
     lines = int(((f >= lo) & (f <= hi)).sum())
     ni = h.sizes["reference"]
     most = min(lines // (2 * ni), MAX_POLES_PER_ORDER // ni)
     if args.orders > most:
-        why = (f"the band holds {lines} lines for {ni} reference(s) and pLSCF needs at "
+        why = (f"the band {lo:.5g}..{hi:.5g} Hz holds {lines} lines for {ni} reference(s) "
+               "and pLSCF needs at "
                "least 2 lines per pole" if lines // (2 * ni) <= MAX_POLES_PER_ORDER // ni
                else f"above {MAX_POLES_PER_ORDER} poles per order the stabilisation "
                "diagram takes many minutes to hours (without --orders the order is "
@@ -206,6 +212,7 @@ def run(args: argparse.Namespace) -> int:
     table = modes.to_dataframe()
     if args.json:
         out = {"method": modes.method, "band_hz": list(modes.diagram.band_hz),
+               "band_reason": getattr(modes, "band_reason", ""),
                "modes": json.loads(table.to_json(orient="records")),
                "shapes": json.loads(modes.shape_table().to_json(orient="records",
                                                          double_precision=15)),
@@ -219,6 +226,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     sys.stdout.write(f"{modes.method}: {modes.n_modes} mode(s) in "
                      f"{modes.diagram.band_hz[0]:g}..{modes.diagram.band_hz[1]:g} Hz\n")
+    if getattr(modes, "band_reason", ""):
+        sys.stdout.write(f"band: {modes.band_reason}\n")
     if modes.n_modes:
         sys.stdout.write(table.to_string(index=False) + "\n")
     else:

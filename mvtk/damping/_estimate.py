@@ -103,10 +103,7 @@ def _half_power_input(ds, *, reference, channel, excitation, nperseg, force_wind
         fr = signal.frf(ds, ref, response=resp, excitation=excitation, nperseg=nperseg,
                         force_window_s=force_window_s)
         notes.append(f"FRF: H1, {fr.attrs['excitation']} excitation, "
-                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}"
-                     + ("; peaks searched in the excited band {:.5g}..{:.5g} Hz".format(
-                         *fr.attrs["excitation_band_hz"])
-                        if fr.attrs.get("excitation") == "sweep" else ""))
+                     f"{fr.attrs['n_averages']} average(s); {fr.attrs['resolution_reason']}")
         for k in ("excitation", "nperseg", "nfft", "resolution_hz", "df_hz", "n_averages",
                   "force_window_s", "exponential_window_tau_s"):
             v = fr.attrs.get(k)
@@ -217,6 +214,12 @@ def estimate(data, *, method: str = "auto", variant: str | None = None, fn_hz=No
                                       force_window_s=force_window_s, notes=notes,
                                       settings=settings)
         settings.update(n_modes=n_modes, fmin_hz=fmin, fmax_hz=fmax)
+        if fn_hz is None and (fmin is None or fmax is None):
+            from ..signal import excited_band
+
+            lo, hi, why = excited_band(spec)
+            lo, hi = (lo if fmin is None else fmin), (hi if fmax is None else fmax)
+            notes.append(f"peaks searched in {lo:.5g}..{hi:.5g} Hz ({why})")
         table = half_power(spec, fn_hz=fn_hz, n_modes=n_modes, fmin=fmin, fmax=fmax,
                            method=variant).to_dataframe()
     else:

@@ -17,7 +17,7 @@ from ..errors import (
 )
 from ..signal._curves import amplitude_curves
 from ..signal._frf import exponential_window_correction
-from ..signal._peaks import MAX_PEAKS, _coherence, find_peaks
+from ..signal._peaks import MAX_PEAKS, RESONANCE_PROMINENCE_DB, _coherence, find_peaks
 from ._common import NoEstimateError
 
 __all__ = ["HalfPowerResult", "half_power", "half_power_zeta"]
@@ -58,7 +58,9 @@ class HalfPowerResult:
         neighbouring mode within ``overlap_factor`` bandwidths), ``"noisy"`` (scatter
         above ``max_scatter`` or coherence at the peak below ``min_coherence``; the name
         covers every deviation from one mode), ``"window"`` (the exponential window
-        made more than 75 % of the measured damping) or ``"failed"``.
+        made more than 75 % of the measured damping), ``"weak"`` (a peak only 3..6 dB
+        above its surroundings, listed so that no resonance is dropped silently, never
+        reliable) or ``"failed"``.
     kind : tuple of str
         Exact single-mode relation used: receptance, mobility or accelerance.
     df_hz : float
@@ -437,6 +439,20 @@ def half_power(
         peaks = find_peaks(spectrum, f_hz, n_peaks=n_modes, fmin=fmin, fmax=fmax,
                            power=power, coherence=coh, max_peaks=max_modes)
         targets = peaks.fn_hz
+        weak: dict[float, float] = {}
+        if n_modes is None and targets.size < max_modes:
+            # resonances standing 3..6 dB out of their surroundings (a weak mode on the
+            # flank of a strong one: acceleration.lvm's 2779.7 Hz, 5 dB) get a row
+            # marked not reliable instead of none
+            low = find_peaks(spectrum, f_hz, fmin=fmin, fmax=fmax, power=power,
+                             coherence=coh, max_peaks=max_modes,
+                             prominence_db=RESONANCE_PROMINENCE_DB)
+            spans = [(f[i] - 3 * df, f[i] + 3 * df) for i in peaks.index]
+            cand = [(p, x) for x, p in zip(low.fn_hz, low.prominence_db)
+                    if not any(a <= x <= b for a, b in spans) and x not in targets]
+            for p, x in sorted(cand, reverse=True)[:max_modes - targets.size]:
+                weak[float(x)] = float(p)
+            targets = np.sort(np.r_[targets, list(weak)])
         if targets.size == 0:
             raise NoEstimateError(
                 "half_power: no peak stands out of the noise (prominence >= max(6 dB, 5 x "
@@ -518,6 +534,14 @@ def half_power(
             else:
                 reason = (f"the -3 dB points were not found on both sides of the peak "
                           f"near {ft:.5g} Hz")
+            if fn_hz is None and float(ft) in weak:
+                why = (f"weak peak at {ft:.5g} Hz: {weak[float(ft)]:.1f} dB above its "
+                       "surroundings "
+                       "(< 6 dB: a neighbouring mode's flank or the background shifts the "
+                       "-3 dB points)")
+                reason = why + ("; " + reason if reason else "")
+                if quality == "ok":
+                    quality = "weak"
             pk_hz = np.sqrt(res["upk"]) / (2 * np.pi) if res else np.nan
             rows["curve"].append(label)
             rows["mode"].append(m if fn_hz is not None else n_rows)

@@ -638,6 +638,15 @@ def frf_matrix(
         vals = {int(p[2][key]) for p in parts if key in p[2]}
         if len(vals) == 1 and all(key in p[2] for p in parts):
             out.attrs[key] = vals.pop()
+    # the band every set excites and the coarsest resolution: the default analysis band
+    # of mvtk.modal.identify starts from them (mvtk.signal.analysis_band)
+    bands = [p[2].get("excitation_band_hz") for p in parts]
+    if all(b is not None and len(b) == 2 for b in bands):
+        out.attrs["excitation_band_hz"] = [max(float(b[0]) for b in bands),
+                                           min(float(b[1]) for b in bands)]
+    res = [p[2].get("resolution_hz") for p in parts]
+    if all(r is not None for r in res):
+        out.attrs["resolution_hz"] = max(float(r) for r in res)
     taus = {float(p[2]["exponential_window_tau_s"]) for p in parts
             if "exponential_window_tau_s" in p[2]}
     if len(taus) == 1 and len(parts) == sum("exponential_window_tau_s" in p[2]

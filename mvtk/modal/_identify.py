@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import xarray as xr
 
+from ..signal import EXCITED_DB
 from ._lsfd import local_misfit, lsfd_with_misfit, synthesise
 from ._plscf import band_frf, plscf
 from ._quality import mpc, mpd
@@ -19,14 +22,16 @@ from ._stabilisation import (
 )
 
 __all__ = ["identify", "dof_labels", "shapes_array", "count_peaks", "default_orders",
-           "excitation_level"]
+           "default_band", "excitation_level"]
 
 PEAK_PROMINENCE_DB = 6.0
 """A peak of the smoothed sum-FRF counts when it stands this far above its surroundings."""
 SMOOTHING_BINS = 1000
 """The sum-FRF is smoothed over ``n_lines / SMOOTHING_BINS`` lines before counting peaks."""
-POLES_PER_PEAK = 6
-"""Model order margin: poles per counted peak (2 for the mode, 4 for noise/background)."""
+POLES_PER_PEAK = 8
+"""Model order margin: poles per counted peak (2 for the mode, 6 for noise/background;
+with 6 the weak 2779.7 Hz mode of camera.lvm, at 3 % of the strongest peak, is stable
+in too few orders of its default band)."""
 MAX_POLES = 160
 """Cap on ``max_order x n_reference`` for the default orders (runtime)."""
 LINES_PER_POLE = 200
@@ -186,14 +191,11 @@ def rank_one_shapes(residue, pole, driving_points):
 MIN_SUPPORT = 2.0
 """A mode must at least halve the LSFD misfit within ``fn +- max(5 lines, 2 zeta fn)``."""
 
-WEAK_EXCITATION_DB = {"impact": -35.0, "sweep": -50.0, "random": -50.0}
+WEAK_EXCITATION_DB = EXCITED_DB
 """A mode is weakly excited when the reference autospectrum at its frequency (best
-reference) is this far below its maximum in the band, by excitation type (chosen from
-the real files, see ``docs/guide/modal.md``): a hammer's force rolls off with frequency
-and what lies 35 dB down is excited by little more than noise (acceleration.lvm: the
-catalogued 8747.5 Hz mode at -31 dB, the noise poles above 10 kHz at -35..-44 dB); a
-shaker's force dips at resonances (drop-out: the view_0 sweep has its catalogued
-350 Hz mode at -37 dB) and only falls below -50 dB outside the swept band."""
+reference) is this far below its maximum in the band, by excitation type: the limit of
+the excited band, :data:`mvtk.signal.EXCITED_DB` (impact -35 dB, sweep and random
+-50 dB; see ``docs/guide/modal.md``)."""
 
 
 MAX_WINDOW_FRACTION = 0.9
@@ -340,10 +342,15 @@ def identify(
         FRF matrix ``("response", "reference", "frequency")`` (conventions page), e.g.
         from :func:`frf_matrix` or :func:`mvtk.io.read` on UFF 58 records.
     fmin, fmax : float, optional
-        Analysis band in Hz (default: the whole FRF).
+        Analysis band in Hz. Default (each bound not given): from the data,
+        :func:`default_band` / :func:`mvtk.signal.analysis_band`: the lines the
+        excitation covers (a sweep's swept band; the force within
+        :data:`mvtk.signal.EXCITED_DB` of its maximum, 35 dB for a hammer; from 5 x the
+        resolution) trimmed to the resonance peaks there / x 1.25; the band and why are
+        ``result.band_hz`` and ``result.band_reason`` (peaks it leaves out or cuts named).
     orders : iterable of int, optional
         pLSCF model orders. Default :func:`default_orders`, chosen from the data:
-        ``2..p_max`` with ``p_max = ceil(6 n_peaks / n_reference)`` (``n_peaks``: peaks
+        ``2..p_max`` with ``p_max = ceil(8 n_peaks / n_reference)`` (``n_peaks``: peaks
         of the smoothed sum-FRF in the band, :func:`count_peaks`; every order gives
         ``n_reference`` poles), at least ``max(20, 64 // n_reference)``, at most 160
         poles per order and one pole per 200 lines of the band. The orders used are
@@ -411,6 +418,7 @@ def identify(
     """
     stab = stability or StabilityCriteria()
     clus = clustering or ClusterCriteria()
+    fmin, fmax, band_reason = default_band(frf, fmin, fmax)
     h = band_frf(frf, fmin, fmax)
     if orders is None:
         orders = default_orders(h)
@@ -421,8 +429,48 @@ def identify(
         sel = select_poles(diagram, clus)
     if refine is None:
         refine = fn_hz is None
-    return modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals,
-                            refine=bool(refine))
+    res = modes_from_poles(h, diagram, sel, clus, stab, residuals=residuals,
+                           refine=bool(refine))
+    return dataclasses.replace(res, band_hz=tuple(float(b) for b in diagram.band_hz),
+                               band_reason=band_reason)
+
+
+def default_band(frf, fmin=None, fmax=None) -> tuple[float | None, float | None, str]:
+    """The analysis band of :func:`identify`: ``(fmin, fmax, reason)`` in Hz.
+
+    Bounds the user gave are kept ("given"); a missing one comes from
+    :func:`mvtk.signal.analysis_band` (the band where the excitation is strong and the
+    response has resonances, with the peaks it leaves out or cuts named in the reason).
+    """
+    from mvtk.signal import analysis_band
+
+    if fmin is not None and fmax is not None:
+        return fmin, fmax, "given"
+    from ._frf import as_frf_matrix
+
+    m = as_frf_matrix(frf)
+    src = dict(frf.attrs)
+    if isinstance(frf, xr.Dataset) and "frf" in frf.data_vars:
+        src.update(frf["frf"].attrs)
+    if src.get("excitation_band_hz") is not None:     # a list: as_frf_matrix drops it
+        m.attrs["excitation_band_hz"] = list(src["excitation_band_hz"])
+    b = analysis_band(m)
+    parts = []
+    if fmin is None:
+        fmin = b.fmin_hz
+    else:
+        parts.append(f"fmin {fmin:g} Hz given")
+    if fmax is None:
+        fmax = b.fmax_hz
+    else:
+        parts.append(f"fmax {fmax:g} Hz given")
+    if fmin >= fmax:
+        from mvtk.errors import ParameterError
+
+        raise ParameterError(f"the band {fmin:g}..{fmax:g} Hz is empty: the default "
+                             f"band from the data is {b.fmin_hz:g}..{b.fmax_hz:g} Hz "
+                             f"({b.reason}); give both fmin and fmax")
+    return fmin, fmax, "; ".join(parts + [f"from the data: {b.reason}"])
 
 
 def _contribution(fit, h):

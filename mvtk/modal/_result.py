@@ -66,6 +66,11 @@ class IdentifiedModes:
         excitation level (UFF 58 and other FRF files). Below the threshold of the
         excitation type (``mvtk.modal._identify.WEAK_EXCITATION_DB``: impact -35 dB,
         sweep and random -50 dB) the mode is marked not reliable ("weakly excited").
+    band_hz : tuple of float or None
+        The analysis band (Hz) the modes were identified in.
+    band_reason : str
+        Why that band: ``"given"``, or how it was chosen from the data (excited band,
+        resonance peaks, peaks the band leaves out or cuts; :func:`mvtk.modal.identify`).
     kurtosis : numpy.ndarray or None
         SSI-cov: kurtosis of the response band-passed around each mode on its strongest
         channel (:func:`mvtk.modal._harmonics.band_kurtosis`; 3 for a mode's response to
@@ -122,6 +127,8 @@ class IdentifiedModes:
     refined: np.ndarray | None = None
     zeta_window: np.ndarray | None = None
     window_tau_s: float | None = None
+    band_hz: tuple | None = None
+    band_reason: str = ""
 
     @property
     def n_modes(self) -> int:

@@ -18,7 +18,16 @@ from ._impact import (
     set_quality,
 )
 from ._input import as_time_history, sampling_rate
-from ._peaks import MAX_PEAKS, PeakResult, find_peaks, noise_jitter_db
+from ._peaks import (
+    EXCITED_DB,
+    MAX_PEAKS,
+    AnalysisBand,
+    PeakResult,
+    analysis_band,
+    excited_band,
+    find_peaks,
+    noise_jitter_db,
+)
 from ._spectral import csd, psd
 
 __all__ = [
@@ -40,6 +49,10 @@ __all__ = [
     "csd",
     "exponential_window_correction",
     "find_peaks",
+    "analysis_band",
+    "excited_band",
+    "AnalysisBand",
+    "EXCITED_DB",
     "frf",
     "frf_kind",
     "is_impulsive",

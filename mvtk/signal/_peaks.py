@@ -11,7 +11,8 @@ import scipy.signal
 from ..errors import DimensionError, FormatError, ParameterError
 from ._curves import amplitude_curves
 
-__all__ = ["MAX_PEAKS", "PeakResult", "find_peaks", "noise_jitter_db"]
+__all__ = ["MAX_PEAKS", "EXCITED_DB", "AnalysisBand", "PeakResult", "analysis_band",
+           "excited_band", "find_peaks", "noise_jitter_db"]
 
 
 @dataclass(frozen=True)
@@ -165,13 +166,13 @@ def find_peaks(
     n_peaks : int, optional
         Keep the most prominent ``n_peaks`` peaks (overrides ``max_peaks``).
     fmin, fmax : float, optional
-        Frequency band in Hz searched for peaks. Default ``fmax`` for an impact FRF from
-        :func:`mvtk.signal.frf`: the top of its ``excitation_band_hz`` (the force
-        spectrum has dropped by 20 dB there; above it the FRF is noise over no input).
-        For a swept-sine FRF the band also sets the default ``fmin`` (its bottom).
-        Default ``fmin`` when the input states ``resolution_hz`` (FRFs from
-        :func:`mvtk.signal.frf`): 5 x that resolution (a mode needs 5 cycles in the
-        record; below it drift and offsets make peaks).
+        Frequency band in Hz searched for peaks. Default: the band the excitation covers,
+        :func:`excited_band` (a sweep's swept band; with the FRF's per-line force level
+        the lines within :data:`EXCITED_DB` of its maximum, 35 dB for a hammer, above it
+        the FRF is noise over no input; else a stated ``excitation_band_hz``), from
+        5 x the stated ``resolution_hz`` (a mode needs 5 cycles in the record; below it
+        drift and offsets make peaks). A stated ``excitation_band_hz`` that starts above
+        0 Hz (a sweep) also bounds a given ``fmin``.
     prominence_db : float
         Minimum prominence in dB (default 6 dB).
     noise_factor : float
@@ -208,14 +209,22 @@ def find_peaks(
     if not (np.isfinite(prominence_db) and prominence_db >= 0):
         raise ParameterError(f"prominence_db must be >= 0 dB, got {prominence_db!r}")
     f = curves.f_hz
-    amp = curves.amplitude
+    if fmin is None or fmax is None:
+        lo, hi, _ = _excited_band(spectrum, curves)
+        fmin = lo if fmin is None else fmin
+        fmax = hi if fmax is None else fmax
     band = curves.attrs.get("excitation_band_hz")
-    if fmax is None and band is not None and len(band) == 2:
-        fmax = float(band[1])
-    if fmin is None and curves.attrs.get("resolution_hz"):
-        fmin = 5.0 * float(curves.attrs["resolution_hz"])
     if band is not None and len(band) == 2 and float(band[0]) > 0:
-        fmin = float(band[0]) if fmin is None else max(fmin, float(band[0]))
+        fmin = max(fmin, float(band[0]))      # below a sweep's start: no input at all
+    coh = _coherence(spectrum, coherence, f.size)
+    return _pick(curves, coh, fmin, fmax, n_peaks=n_peaks, prominence_db=prominence_db,
+                 noise_factor=noise_factor, min_coherence=min_coherence,
+                 max_peaks=max_peaks, dynamic_range_db=dynamic_range_db)
+
+
+def _total(curves):
+    """Sum of the curves each normalised by its maximum, and the same in dB."""
+    amp = curves.amplitude
     finite = np.isfinite(amp)
     if not finite.any():
         raise FormatError("find_peaks: the spectrum holds no finite value")
@@ -224,6 +233,14 @@ def find_peaks(
     scale = np.max(amp, axis=1, keepdims=True)
     scale[scale == 0] = 1.0
     total = np.sum(amp / scale, axis=0)
+    return total, 20 * np.log10(np.maximum(total, np.finfo(float).tiny))
+
+
+def _pick(curves, coh, fmin, fmax, *, n_peaks=None, prominence_db=6.0, noise_factor=5.0,
+          min_coherence=0.5, max_peaks=MAX_PEAKS, dynamic_range_db=60.0) -> PeakResult:
+    """The peak picking of :func:`find_peaks` on ``fmin..fmax`` (Hz, None: open)."""
+    f = curves.f_hz
+    total, full_db = _total(curves)
     lo = 0 if fmin is None else int(np.searchsorted(f, fmin, side="left"))
     hi = f.size if fmax is None else int(np.searchsorted(f, fmax, side="right"))
     if hi - lo < 3:
@@ -231,7 +248,6 @@ def find_peaks(
             f"band fmin={fmin!r}..fmax={fmax!r} Hz holds {max(hi - lo, 0)} lines of "
             f"{f[0]:g}..{f[-1]:g} Hz; need >= 3"
         )
-    full_db = 20 * np.log10(np.maximum(total, np.finfo(float).tiny))
     db = full_db[lo:hi]
     lag = 1
     if curves.attrs.get("nfft") and curves.attrs.get("nperseg"):
@@ -243,12 +259,13 @@ def find_peaks(
     idx, props = scipy.signal.find_peaks(db, prominence=float(prominence_db))
     prom = props["prominences"]
     ok = prom >= noise_factor * local[idx]
-    if idx.size:
-        ok &= db[idx] >= db[idx].max() - float(dynamic_range_db)
-    idx, prom = idx[ok], prom[ok]
-    coh = _coherence(spectrum, coherence, f.size)
     if coh is not None and idx.size:
-        ok = coh[idx + lo] >= min_coherence
+        # before the dynamic range: an incoherent spike (H1 over a dip of the force)
+        # must not set the level the modes are measured against
+        ok &= coh[idx + lo] >= min_coherence
+    idx, prom = idx[ok], prom[ok]
+    if idx.size:
+        ok = db[idx] >= db[idx].max() - float(dynamic_range_db)
         idx, prom = idx[ok], prom[ok]
     # one row per physical peak: drop peaks inside the -3 dB band of a stronger one
     order = np.argsort(prom)[::-1]
@@ -293,3 +310,284 @@ def _coherence(spectrum, coherence, nf: int):
         raise DimensionError(
             f"coherence has {c.shape[-1]} frequency lines, the spectrum {nf}")
     return np.nanmean(c, axis=0)
+
+
+EXCITED_DB = {"impact": -35.0, "sweep": -50.0, "random": -50.0}
+"""A line is excited when the reference autospectrum there (best reference) is within
+this many dB of its maximum, by excitation type (chosen from the real files of
+``../shared/data``, see ``docs/guide/modal.md``): a hammer's force rolls off with
+frequency and what lies 35 dB down is excited by little more than noise
+(acceleration.lvm: the catalogued 8747.5 Hz mode at -31 dB, the noise poles above 10 kHz
+at -35..-44 dB); a shaker's force dips at resonances (drop-out: the view_0 sweep has its
+catalogued 350 Hz mode at -37 dB) and only falls below -50 dB outside the driven band.
+:func:`mvtk.modal.identify` marks a mode below it "weakly excited"."""
+
+MIN_CYCLES = 5
+"""A mode needs this many cycles in the record: the default band starts at
+``MIN_CYCLES x resolution_hz`` (below it drift and offsets make peaks)."""
+
+RESONANCE_MARGIN = 1.25
+"""The default analysis band reaches this factor (about a third octave) below the lowest
+and above the highest resonance peak, so that the flanks of the outer modes and the
+residual terms are fitted."""
+
+
+RESONANCE_PROMINENCE_DB = 3.0
+"""A resonance peak bounds the default band when it stands 3 dB out of its surroundings
+(its half-power points exist; the broad 450..466 Hz hump of the view_0 sweep stands
+3.4 dB) and 5 x above the noise jitter."""
+
+
+def _level(spectrum):
+    """Best-reference excitation level per line (dB re its maximum), or None."""
+    import xarray as xr
+
+    lev = None
+    if isinstance(spectrum, xr.Dataset | xr.DataArray):
+        if "reference_level_db" in spectrum.coords:
+            lev = spectrum.coords["reference_level_db"]
+        elif isinstance(spectrum, xr.Dataset) and "reference_level_db" in spectrum:
+            lev = spectrum["reference_level_db"]
+    if lev is None or "frequency" not in lev.dims:
+        return None
+    v = np.asarray(lev.transpose(..., "frequency").values, dtype=float)
+    v = v.reshape(-1, v.shape[-1])
+    with np.errstate(invalid="ignore"):
+        best = np.where(np.isfinite(v), v, -np.inf).max(axis=0)
+    return best
+
+
+def _excited_band(spectrum, curves) -> tuple[float, float, list[str]]:
+    """``(fmin, fmax, reasons)``: the band the excitation covers (see :func:`excited_band`)."""
+    f = curves.f_hz
+    a = curves.attrs
+    pos = f[f > 0]
+    lo = float(pos[0]) if pos.size else float(f[0])
+    hi = float(f[-1])
+    why: list[str] = []
+    kind = str(a.get("excitation", ""))
+    band = a.get("excitation_band_hz")
+    band = [float(b) for b in band] if band is not None and len(band) == 2 else None
+    level = _level(spectrum)
+    if level is not None and level.shape[-1] != f.size:
+        level = None
+    name = "force" if str(a.get("excitation", "")) else "excitation"
+    if kind == "sweep" and band is not None:
+        lo, hi = max(lo, band[0]), min(hi, band[1])
+        why.append(f"swept band {band[0]:.4g}..{band[1]:.4g} Hz")
+    elif level is not None and kind in EXCITED_DB:
+        thr = EXCITED_DB[kind]
+        ok = (level >= thr) & (f > 0)
+        if ok.any():
+            lo, hi = max(lo, float(f[ok][0])), float(f[ok][-1])
+            why.append(f"{kind} {name} within {-thr:g} dB of its maximum over "
+                       f"{f[ok][0]:.4g}..{f[ok][-1]:.4g} Hz")
+    elif band is not None:
+        lo, hi = max(lo, band[0]), min(hi, band[1])
+        why.append(f"excitation band {band[0]:.4g}..{band[1]:.4g} Hz stated by the FRF")
+    else:
+        why.append("no excitation level or band stated: every line counts as excited")
+    res = a.get("resolution_hz")
+    if res and MIN_CYCLES * float(res) > lo:
+        lo = MIN_CYCLES * float(res)
+        why.append(f"from {MIN_CYCLES} x the {float(res):.4g} Hz resolution ({MIN_CYCLES} "
+                   "cycles of a mode in the record)")
+    return lo, hi, why
+
+
+def excited_band(spectrum, f_hz=None, *, power: bool | None = None
+                 ) -> tuple[float, float, str]:
+    """The band (Hz) the excitation of an FRF covers, and why.
+
+    In order: a swept-sine FRF's swept band (``attrs["excitation_band_hz"]`` with
+    ``attrs["excitation"] == "sweep"``: below and above it the shaker drove nothing);
+    with a per-line excitation level (``reference_level_db``, as :func:`mvtk.signal.frf`
+    and :func:`mvtk.modal.frf_matrix` attach it) the lines where the best reference
+    lies within :data:`EXCITED_DB` of its maximum (impact 35 dB, random and sweep 50 dB);
+    else a stated ``excitation_band_hz``; else the whole axis. The band starts no lower
+    than ``MIN_CYCLES x resolution_hz`` (5 cycles of a mode in the record) when the
+    FRF states its resolution, and never at 0 Hz.
+
+    Returns
+    -------
+    fmin_hz, fmax_hz : float
+    reason : str
+    """
+    curves = amplitude_curves(spectrum, f_hz, power=power)
+    lo, hi, why = _excited_band(spectrum, curves)
+    return lo, hi, "; ".join(why)
+
+
+@dataclass(frozen=True)
+class AnalysisBand:
+    """A default analysis band chosen from the data (:func:`analysis_band`).
+
+    Attributes
+    ----------
+    fmin_hz, fmax_hz : float
+        The band in Hz.
+    reason : str
+        Why: the excited band, the resonances it holds, the peaks it leaves out or cuts.
+    excited_hz : tuple of float
+        The band the excitation covers (:func:`excited_band`), Hz.
+    peaks_hz : numpy.ndarray
+        The resonance peaks (Hz) the band was drawn around.
+    left_out_hz : numpy.ndarray
+        Spectral peaks (Hz) of the whole axis outside the band.
+    cut_hz : numpy.ndarray
+        Spectral peaks (Hz) whose -3 dB band an edge of the band cuts.
+    """
+
+    fmin_hz: float
+    fmax_hz: float
+    reason: str
+    excited_hz: tuple
+    peaks_hz: np.ndarray
+    left_out_hz: np.ndarray
+    cut_hz: np.ndarray
+
+    def __iter__(self):
+        return iter((self.fmin_hz, self.fmax_hz))
+
+
+def _name_peaks(fpk, level, f, limit=6) -> str:
+    """``"11928 Hz (force -41 dB), ..."``, the first ``limit`` and how many more."""
+    parts = []
+    named: list[float] = []
+    for x in fpk:
+        if len(named) >= limit:
+            break
+        if any(abs(x - y) <= 0.01 * y for y in named):
+            continue            # a cluster of noise peaks: its strongest named once
+        named.append(float(x))
+        txt = f"{x:.5g} Hz"
+        if level is not None:
+            k = int(np.argmin(np.abs(f - x)))
+            if np.isfinite(level[k]):
+                txt += f" (excitation {level[k]:.0f} dB)"
+        parts.append(txt)
+    more = len(fpk) - len(named)
+    return ", ".join(parts) + (f" and {more} more" if more > 0 else "")
+
+
+def analysis_band(spectrum, f_hz=None, *, power: bool | None = None, coherence=None,
+                  min_coherence: float = 0.5, margin: float = RESONANCE_MARGIN
+                  ) -> AnalysisBand:
+    """Default analysis band of an FRF (or spectrum): where the excitation is strong and
+    coherent and the response has resonances.
+
+    1. The excited band (:func:`excited_band`: a sweep's swept band, the lines where
+       the force is within :data:`EXCITED_DB` of its maximum, ``MIN_CYCLES x
+       resolution_hz`` and up).
+    2. The resonance peaks in it, picked as :func:`find_peaks` does (prominence >=
+       :data:`RESONANCE_PROMINENCE_DB` = 3 dB and >= 5 x the local noise jitter, mean
+       coherence >= ``min_coherence`` where a coherence exists, within 60 dB of the
+       highest peak, no limit on their number), and every peak of the whole axis
+       (prominence >= 6 dB) whose top lies in the excited band.
+    3. The band spans the lowest peak / ``margin`` to the highest peak x ``margin``
+       (default :data:`RESONANCE_MARGIN` = 1.25), inside the excited band; without a
+       peak, the whole excited band.
+    4. An edge that falls inside the -3 dB band of a peak moves out to include it where
+       the excited band allows; the peaks that an edge still cuts, and the peaks of the
+       whole axis left outside, are named in ``reason``.
+
+    Parameters
+    ----------
+    spectrum, f_hz, power
+        As in :func:`find_peaks`.
+    coherence : array_like, optional
+        Coherence on the same lines; default the FRF's ``coherence`` (Dataset variable
+        or DataArray coordinate, as :func:`mvtk.modal.frf_matrix` attaches it).
+    min_coherence : float
+        Peaks with a lower mean coherence do not count as resonances.
+    margin : float
+        Band reach beyond the outer resonance peaks, as a frequency factor (> 1).
+
+    Returns
+    -------
+    AnalysisBand
+        Iterates as ``(fmin_hz, fmax_hz)``.
+
+    Examples
+    --------
+    Two modes (40 and 80 Hz) on a 0..1000 Hz axis, hammer force stated up to 600 Hz:
+
+    >>> import xarray as xr
+    >>> f = np.linspace(0, 1000, 4001)
+    >>> h = sum(1 / (fn**2 - f**2 + 2j * 0.01 * fn * f) for fn in (40.0, 80.0))
+    >>> da = xr.DataArray(h[None, None], dims=("response", "reference", "frequency"),
+    ...                   coords={"frequency": f}, attrs={"excitation_band_hz": [0, 600]})
+    >>> b = analysis_band(da)
+    >>> round(b.fmin_hz, 1), round(b.fmax_hz, 1)
+    (32.0, 100.0)
+    """
+    import xarray as xr
+
+    if not margin > 1:
+        raise ParameterError(f"margin must be > 1, got {margin!r}")
+    curves = amplitude_curves(spectrum, f_hz, power=power)
+    f = curves.f_hz
+    lo, hi, why = _excited_band(spectrum, curves)
+    if hi <= lo:
+        raise ParameterError(f"analysis_band: the excited band {lo:g}..{hi:g} Hz is empty "
+                             f"({'; '.join(why)})")
+    if (coherence is None and isinstance(spectrum, xr.DataArray)
+            and "coherence" in spectrum.coords
+            and "frequency" in spectrum.coords["coherence"].dims):
+        coherence = spectrum.coords["coherence"].transpose(..., "frequency")
+    coh = _coherence(spectrum, coherence, f.size)
+    big = max(f.size, 1)
+    inside = _pick(curves, coh, lo, hi, min_coherence=min_coherence, max_peaks=big,
+                   prominence_db=RESONANCE_PROMINENCE_DB)
+    total, _ = _total(curves)
+    level = _level(spectrum)
+    if level is not None and level.shape[-1] != f.size:
+        level = None
+    # every peak of the whole axis (same criteria, as many as there are); one whose
+    # top lies in the excited band is a resonance even where the band's edge cuts its
+    # flank (its prominence within the band is then too small)
+    every = _pick(curves, coh, None, None, min_coherence=min_coherence, max_peaks=big,
+                  dynamic_range_db=np.inf)
+    res_hz = np.union1d(inside.fn_hz, every.fn_hz[(every.fn_hz >= lo) & (every.fn_hz <= hi)])
+    if res_hz.size:
+        b0 = max(lo, float(res_hz.min()) / margin)
+        b1 = min(hi, float(res_hz.max()) * margin)
+        why.append(f"{res_hz.size} resonance peak(s) at {res_hz.min():.5g}.."
+                   f"{res_hz.max():.5g} Hz, band x/{margin:g} below and x{margin:g} "
+                   "above them")
+    else:
+        b0, b1 = lo, hi
+        why.append("no resonance peak stands out of the noise: the whole excited band")
+    cut = []
+    for i, fp in zip(every.index, every.fn_hz):
+        left, right = _half_width(total, int(i))
+        a, b = f[max(int(i) - left, 0)], f[min(int(i) + right, f.size - 1)]
+        for edge in (0, 1):
+            e = (b0, b1)[edge]
+            if a < e < b:
+                if edge == 0 and a >= lo:
+                    b0 = float(a) - (b - a)
+                    b0 = max(b0, lo)
+                elif edge == 1 and b <= hi:
+                    b1 = min(float(b) + (b - a), hi)
+                if (b0, b1)[edge] > a and (b0, b1)[edge] < b:
+                    cut.append(float(fp))
+    res = curves.attrs.get("resolution_hz")
+    floor = MIN_CYCLES * float(res) if res else 0.0
+    # peaks below the resolution floor are drift and leakage of the record, not named
+    out = every.fn_hz[((every.fn_hz < b0) & (every.fn_hz >= floor)) | (every.fn_hz > b1)]
+    out = np.array([x for x in out if x not in cut])
+    cut = np.array(sorted(set(cut)))
+    if cut.size:
+        why.append("the band edge cuts the peak(s) at " + _name_peaks(cut, level, f))
+    if out.size:
+        # the most strongly excited first (peaks over no input are noise), else the
+        # most prominent
+        if level is not None:
+            key = -level[np.abs(f[None, :] - out[:, None]).argmin(axis=1)]
+        else:
+            key = -every.prominence_db[np.isin(every.fn_hz, out)]
+        why.append("peaks left out: " + _name_peaks(out[np.argsort(key, kind="stable")],
+                                                     level, f))
+    return AnalysisBand(float(b0), float(b1), "; ".join(why), (float(lo), float(hi)),
+                        np.asarray(res_hz, float), out, cut)

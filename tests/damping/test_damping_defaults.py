@@ -143,10 +143,12 @@ def test_mat_case1_cli_no_estimator_options(shared_data, capsys):
 
 @pytest.mark.shared_data
 def test_mat_case2_time_data_without_hit_says_so(shared_data, capsys):
-    # case2's force channel holds no hammer hit (only its offset and noise)
+    # case2's force channel holds no hammer hit (only its offset and noise); the few
+    # peaks coherent with it (0.64..0.78) are listed, none reliable, each with its reason
     code, rows, err = _cli_json([str(shared_data / "mat" / "case2.mat"), *MAT_TH], capsys)
-    assert code == 1 and rows == []
-    assert "no reliable estimate" in err and "no peak stands out" in err
+    assert code == 1 and len(rows) <= 6
+    assert all(not r["reliable"] and r["reason"] for r in rows)
+    assert "no reliable estimate" in err
 
 
 @pytest.mark.shared_data

@@ -69,7 +69,7 @@ def test_orders_beyond_the_data_or_the_runtime_cap(capsys):
     assert "--orders 5000: above 400 poles per order" in err and err.endswith(
         "expected --orders <= 400")
     err = _error(capsys, ["modal", SCAN, "--fmin", "100", "--fmax", "150", "--orders", "300"])
-    assert "the band holds 401 lines for 1 reference(s)" in err
+    assert "the band 100..150 Hz holds 401 lines for 1 reference(s)" in err
     assert err.endswith("expected --orders <= 200")
 
 
