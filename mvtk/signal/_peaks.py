@@ -412,6 +412,20 @@ def excited_band(spectrum, f_hz=None, *, power: bool | None = None
     -------
     fmin_hz, fmax_hz : float
     reason : str
+
+    Examples
+    --------
+    A sweep from 60 to 500 Hz stated by the FRF: nothing outside it was excited.
+
+    >>> import xarray as xr
+    >>> f = np.linspace(0, 2000, 2001)
+    >>> h = 1 / (100.0**2 - f**2 + 2j * 0.01 * 100.0 * f)
+    >>> da = xr.DataArray(h[None, None], dims=("response", "reference", "frequency"),
+    ...                   coords={"frequency": f},
+    ...                   attrs={"excitation": "sweep", "excitation_band_hz": [60, 500]})
+    >>> lo, hi, why = excited_band(da)
+    >>> lo, hi
+    (60.0, 500.0)
     """
     curves = amplitude_curves(spectrum, f_hz, power=power)
     lo, hi, why = _excited_band(spectrum, curves)
@@ -436,6 +450,16 @@ class AnalysisBand:
         Spectral peaks (Hz) of the whole axis outside the band.
     cut_hz : numpy.ndarray
         Spectral peaks (Hz) whose -3 dB band an edge of the band cuts.
+
+    Examples
+    --------
+    Unpacks as ``(fmin_hz, fmax_hz)``:
+
+    >>> b = AnalysisBand(32.0, 100.0, "two resonances", (0.0, 600.0),
+    ...                  np.array([40.0, 80.0]), np.array([]), np.array([]))
+    >>> fmin, fmax = b
+    >>> fmin, fmax, b.peaks_hz.tolist()
+    (32.0, 100.0, [40.0, 80.0])
     """
 
     fmin_hz: float
