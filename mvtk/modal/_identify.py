@@ -203,6 +203,13 @@ MAX_WINDOW_FRACTION = 0.9
 this fraction of its identified (windowed) damping: removing it multiplies any relative
 error of the windowed pole by ``1 / (1 - fraction)`` (10 at 0.9)."""
 
+MAX_ZETA_REL_STD = 0.5
+"""A mode is not reliable when the standard deviation of its damping exceeds this
+fraction of the damping: its 95 % interval ``zeta (1 +- 2 x 0.5)`` then reaches zero, so
+the data do not determine the damping (a weak, broad pole the fit could as well drop or
+move: camera.lvm's default-band poles near 10 kHz have 55-70 %, its catalogued modes
+below 1 %)."""
+
 MAX_TRUNCATION = 0.01
 """On zero-padded (interpolated) lines of an exponentially windowed record, a mode whose
 windowed decay ``exp(-sigma_w T)`` is still above this fraction of its amplitude at the
@@ -247,7 +254,8 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
                   kurtosis=None, max_harmonic_kurtosis=None, zeta_fit=None,
                   clean_support=None, flagged="", zeta_window=None,
                   max_window_fraction=MAX_WINDOW_FRACTION, truncation=None,
-                  max_truncation=MAX_TRUNCATION):
+                  max_truncation=MAX_TRUNCATION, zeta_std=None,
+                  max_zeta_rel_std=MAX_ZETA_REL_STD):
     """``reliable`` and ``reason`` per mode from the stated criteria.
 
     ``zeta_fit``: damping of the fitted FRFs (before an exponential window's damping
@@ -257,7 +265,9 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     ``zeta_window``: the window's damping ``1 / (tau wn)``, above
     ``max_window_fraction`` of ``zeta_fit`` the mode is not reliable.
     ``truncation``: the windowed mode's amplitude left at the end of a zero-padded
-    record, above ``max_truncation`` not reliable (see :data:`MAX_TRUNCATION`)."""
+    record, above ``max_truncation`` not reliable (see :data:`MAX_TRUNCATION`).
+    ``zeta_std``: standard deviation of ``zeta``; above ``max_zeta_rel_std`` of it the
+    damping is not determined by the data (:data:`MAX_ZETA_REL_STD`)."""
     reliable, reason = [], []
     nan = np.full(len(fn), np.nan)
     kurtosis = nan if kurtosis is None else kurtosis
@@ -270,10 +280,14 @@ def quality_flags(fn, zeta, mpc_v, count, need, band, zeta_max, edge=0.01, df_hz
     clean_support = nan if clean_support is None else clean_support
     zeta_window = nan if zeta_window is None else zeta_window
     truncation = nan if truncation is None else truncation
-    for f, z, m, c, q, loc, sup, hw, ex, ku, zf, cs, zw, tr in zip(
+    zeta_std = nan if zeta_std is None else zeta_std
+    for f, z, m, c, q, loc, sup, hw, ex, ku, zf, cs, zw, tr, zs in zip(
             fn, zeta, mpc_v, count, contribution, local, support, half_hz, excitation_db,
-            kurtosis, zeta_fit, clean_support, zeta_window, truncation):
+            kurtosis, zeta_fit, clean_support, zeta_window, truncation, zeta_std):
         why = []
+        if np.isfinite(zs) and z > 0 and zs > max_zeta_rel_std * z:
+            why.append(f"damping not determined by the data: zeta_std is {zs / z:.0%} of "
+                       f"zeta (> {max_zeta_rel_std:.0%})")
         if np.isfinite(zw) and zf > 0 and zw > max_window_fraction * zf:
             why.append(f"window damping is {zw / zf:.0%} of the identified damping "
                        f"(> {max_window_fraction:.0%}): removing it multiplies any error "
@@ -658,7 +672,8 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
                                      excitation_name="force" if rq == {"force"}
                                      else "excitation",
                                      clean_support=clean_support, flagged=flagged,
-                                     zeta_window=zeta_window, truncation=truncation)
+                                     zeta_window=zeta_window, truncation=truncation,
+                                     zeta_std=zeta_std)
     return IdentifiedModes(
         method="pLSCF+LSFD", fn_hz=fn, zeta=zeta,
         pole=2 * np.pi * fn * (-zeta + 1j * np.sqrt(np.clip(1 - zeta**2, 0, None))),

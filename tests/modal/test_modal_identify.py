@@ -229,3 +229,20 @@ def test_weakly_excited_modes_are_flagged(msys):
         for i in np.flatnonzero(weak):
             assert f"weakly excited: force {res.excitation_db[i]:.0f} dB" in res.reason[i]
         assert "excitation_db" in res.to_dataframe().columns
+
+
+def test_damping_the_data_do_not_determine_is_not_reliable():
+    """quality_flags: a mode whose zeta_std exceeds MAX_ZETA_REL_STD (0.5) of its damping
+    has a 95 % interval reaching zero damping; it is not reliable and says so. Below
+    the limit the mode keeps its verdict."""
+    from mvtk.modal._identify import MAX_ZETA_REL_STD, quality_flags
+
+    fn = np.array([100.0, 200.0, 300.0])
+    zeta = np.array([0.01, 0.01, 0.01])
+    zstd = np.array([0.004, 0.0051, np.nan])
+    ok, why = quality_flags(fn, zeta, np.ones(3), np.full(3, 20), 5, (50.0, 400.0), 0.2,
+                            zeta_std=zstd)
+    assert MAX_ZETA_REL_STD == 0.5
+    assert ok.tolist() == [True, False, True]
+    assert why[1] == ("damping not determined by the data: zeta_std is 51% of zeta "
+                      "(> 50%)")
