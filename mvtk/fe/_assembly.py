@@ -31,8 +31,8 @@ class SparsityPattern:
     """CSR sparsity pattern of element matrices summed over a DOF map, reusable.
 
     Built once per connectivity and constraint set; :meth:`assemble` then sums any
-    element matrices of that mesh (K, M, or new values after a parameter change) with
-    one ``np.bincount`` over precomputed positions, without sorting anything.
+    element matrices of that mesh (K, M, or new values after a parameter change) over
+    precomputed positions, without sorting anything.
 
     When the element DOFs come in node blocks (``dofs[e, b*s:b*s+b] = b*node + 0..b-1``,
     as for 6-DOF shells and beams) and the free DOFs are numbered in global order, the
@@ -40,7 +40,15 @@ class SparsityPattern:
     sorted (a few hundred thousand for a 50 000-DOF shell model instead of 4.7 million
     matrix entries) and the DOF-level CSR arrays are index arithmetic. Otherwise the
     matrix-entry keys are sorted (``np.unique``). Both give the same CSR matrix with
-    sorted column indices, and every entry is summed in element order.
+    sorted column indices.
+
+    Summation: on a node-graph pattern the ``b x b`` blocks of the elements are summed
+    per node pair by one sparse product (the pair-by-element-block incidence times the
+    blocks), and each pair's block is then written to its CSR positions; with distinct
+    element matrices and the index of each element's one (``rep``), the incidence
+    counts the elements that share a matrix, so the ``n_el`` element matrices are never
+    formed (a 1 000 000-DOF plate would hold 1.5 GB of them). Otherwise the entries
+    are summed with one ``np.bincount`` over :attr:`position`, in element order.
 
     Parameters
     ----------
@@ -56,7 +64,8 @@ class SparsityPattern:
         CSR structure (sorted column indices) of the ``n_free x n_free`` matrix.
     position : ndarray (n_el * n * n,)
         Index into the CSR data of each element-matrix entry (``nnz`` for entries on a
-        constrained DOF, which are dropped).
+        constrained DOF, which are dropped); for a node-graph pattern computed on
+        first use.
     """
 
     def __init__(self, dofs: np.ndarray, free_index: np.ndarray, n_free: int):
@@ -94,8 +103,9 @@ class SparsityPattern:
         self.indices = uniq % n_free
         row_of = uniq // n_free
         self.indptr = np.searchsorted(row_of, np.arange(n_free + 1))
-        self.position = np.full(rows.shape, len(uniq), dtype=np.intp)
-        self.position[keep] = inverse.ravel()
+        self._position = np.full(rows.shape, len(uniq), dtype=np.intp)
+        self._position[keep] = inverse.ravel()
+        self._gather = None
 
     def _from_node_graph(self, dofs, free_index, b):
         n_el, n = dofs.shape
@@ -125,32 +135,123 @@ class SparsityPattern:
         start = cw[pstart[free_node]]
         self.indices = template[np.repeat(start - indptr[:-1], row_len) + np.arange(nnz)]
         self.indptr = indptr
-        # position of every element entry (e, i=(si, a), j=(sj, c))
-        fi = free_index[dofs].reshape(n_el, s, b)
+        # CSR position of every entry of every node-pair block (pair p = (P, Q), row DOF
+        # a of P, column DOF c of Q); an entry in the row or column of a constrained DOF
+        # gets a position >= nnz (base or rank set to nnz, the other terms >= 0), clipped
+        # to nnz below
+        fi = free_index.reshape(n_nodes, b)
         bad = fi < 0
-        rank = fi - first[nodes][:, :, None]                          # (n_el, s, b)
-        base = indptr[np.maximum(fi, 0)]                              # (n_el, s, b)
-        # an entry in the row or column of a constrained DOF gets a position >= nnz
-        # (base or rank set to nnz, the other terms >= 0), clipped to nnz below
+        rank = fi - first[:-1, None]                                 # (n_nodes, b)
+        base = indptr[np.maximum(fi, 0)]                             # (n_nodes, b)
         rank[bad] = nnz
         base[bad] = nnz
-        pos = (base[:, :, :, None, None]
-               + offset[pinv].reshape(n_el, s, 1, s, 1)
-               + rank[:, None, None, :, :])
+        itype = np.int32 if 3 * nnz < 2**31 - 1 else np.int64
+        pos = np.add(base[P][:, :, None], rank[Q][:, None, :], dtype=itype)
+        pos += offset.astype(itype)[:, None, None]
+        pos = pos.ravel()
+        # the inverse: for every CSR entry, its (pair, a, c) in the pair blocks (each
+        # entry is in exactly one pair block), so that the data are one np.take
+        self._gather = np.empty(nnz, dtype=itype)
         if np.any(bad):
-            np.minimum(pos, nnz, out=pos)
-        self.position = pos.reshape(-1).astype(np.intp, copy=False)
+            valid = np.flatnonzero(pos < nnz)
+            self._gather[pos[valid]] = valid
+        else:
+            self._gather[pos] = np.arange(len(pos), dtype=itype)
+        self._pair_of = pinv.ravel().astype(itype, copy=False)      # (n_el * s * s,)
+        self._n_pairs = len(upair)
+        self._block = (s, b)
+        self._position = None
 
-    def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:
-        """Sum element matrices ``Ke`` (n_el, n, n) into a CSR matrix on this pattern."""
-        Ke = np.asarray(Ke, dtype=float)
-        if Ke.shape != (*self.element_shape, self.element_shape[1]):
-            n_el, n = self.element_shape
-            raise DimensionError(
-                f"element matrices must have shape ({n_el}, {n}, {n}), got {Ke.shape}"
-            )
-        data = np.bincount(self.position, weights=Ke.reshape(-1), minlength=self.nnz + 1)
-        return sp.csr_matrix((data[: self.nnz], self.indices, self.indptr), shape=self.shape)
+    @property
+    def position(self) -> np.ndarray:
+        """Index into the CSR data of each element-matrix entry, shape (n_el * n * n,)
+        (``nnz`` for entries on a constrained DOF); computed on first use."""
+        if self._position is None:
+            s, b = self._block
+            n_el = self.element_shape[0]
+            pair_position = np.full(self._n_pairs * b * b, self.nnz, dtype=np.intp)
+            pair_position[self._gather] = np.arange(self.nnz)
+            pos = pair_position.reshape(self._n_pairs, b * b)[self._pair_of]
+            pos = pos.reshape(n_el, s, s, b, b)
+            self._position = pos.transpose(0, 1, 3, 2, 4).reshape(-1).astype(
+                np.intp, copy=False)
+        return self._position
+
+    def _pair_sums(self, mats, rep):
+        """Node-pair block sums of element matrices (node-graph patterns): one sparse
+        product of the (pair x element-block) incidence with the element blocks of all
+        matrices in ``mats``, shape (n_pairs, n_mats * b * b)."""
+        s, b = self._block
+        n_el = self.element_shape[0]
+        n_u = len(mats[0])
+        # blocks (element or distinct element u, node pair si, sj) x (matrix, a, c)
+        blocks = np.stack([m.reshape(n_u, s, b, s, b).transpose(0, 1, 3, 2, 4)
+                           for m in mats], axis=3).reshape(n_u * s * s, len(mats) * b * b)
+        owner = np.arange(n_el) if rep is None else rep
+        col = (owner[:, None] * (s * s) + np.arange(s * s)).ravel()
+        n_pairs = self._n_pairs
+        # the incidence summed over elements sharing a distinct matrix (a count per
+        # pair and block), so that every distinct block is read, not copied per element
+        inc = sp.csr_matrix((np.ones(len(col)), (self._pair_of, col)),
+                            shape=(n_pairs, n_u * s * s))
+        return inc @ blocks
+
+    def assemble_many(self, mats, rep: np.ndarray | None = None) -> list[sp.csr_matrix]:
+        """Sum several sets of element matrices (e.g. K and M) into CSR matrices.
+
+        Parameters
+        ----------
+        mats : sequence of ndarray
+            Each of shape (n_el, n, n), the matrix of every element; or, with ``rep``,
+            (n_u, n, n), the distinct element matrices.
+        rep : ndarray of int (n_el,), optional
+            Index into the distinct matrices of each element (structured meshes have a
+            handful of distinct elements): they are summed without an array of
+            ``n_el`` element matrices.
+
+        Returns
+        -------
+        list of scipy.sparse.csr_matrix
+        """
+        n_el, n = self.element_shape
+        mats = [np.asarray(m, dtype=float) for m in mats]
+        if rep is not None:
+            rep = np.asarray(rep, dtype=np.int64)
+            if rep.shape != (n_el,):
+                raise DimensionError(f"rep must have shape ({n_el},), got {rep.shape}")
+        for m in mats:
+            n_u = n_el if rep is None else len(mats[0])
+            if m.shape != (n_u, n, n):
+                raise DimensionError(
+                    f"element matrices must have shape ({n_u}, {n}, {n}), got {m.shape}")
+        if rep is not None and rep.size and (rep.min() < 0 or rep.max() >= len(mats[0])):
+            raise DimensionError(f"rep must index 0..{len(mats[0]) - 1}")
+        out = []
+        if self._gather is not None:
+            sums = self._pair_sums(mats, rep).ravel()
+            bb = self._block[1] ** 2
+            # entry j of the block of pair p, matrix k: sums[p * n_mats * bb + k * bb + j]
+            idx = (self._gather // bb).astype(np.intp)
+            idx *= len(mats) * bb
+            idx += self._gather % bb
+            for _ in mats:
+                data = np.take(sums, idx)
+                idx += bb
+                out.append(sp.csr_matrix((data, self.indices, self.indptr),
+                                         shape=self.shape))
+            return out
+        for m in mats:
+            Ke = m if rep is None else m[rep]
+            data = np.bincount(self.position, weights=Ke.reshape(-1),
+                               minlength=self.nnz + 1)
+            out.append(sp.csr_matrix((data[: self.nnz], self.indices, self.indptr),
+                                     shape=self.shape))
+        return out
+
+    def assemble(self, Ke: np.ndarray, rep: np.ndarray | None = None) -> sp.csr_matrix:
+        """Sum element matrices ``Ke`` (n_el, n, n) into a CSR matrix on this pattern (or
+        distinct matrices ``Ke`` (n_u, n, n) with ``rep``: see :meth:`assemble_many`)."""
+        return self.assemble_many([Ke], rep)[0]
 
 
 def _node_block(dofs: np.ndarray, free_index: np.ndarray, n_free: int) -> int:
@@ -302,7 +403,6 @@ def assemble_shell_model(
     hs = np.stack([s.H for s in sections])[sec]
     inertia = np.array([[s.I0, s.I1, s.I2] for s in sections])[sec]
     Ku, Mu = mitc4_matrices(xy[first], abd, hs, inertia, drill_factor)
-    Ke, Me = Ku[rep], Mu[rep]
 
     n_all = n_nodes * 6
     fixed = np.zeros(n_all, dtype=bool)
@@ -319,8 +419,7 @@ def assemble_shell_model(
     free_index[free] = np.arange(len(free))
     dofs = (elements[:, :, None] * 6 + np.arange(6)[None, None, :]).reshape(len(elements), 24)
     pattern = sparsity_pattern(dofs, free_index, len(free))
-    K = pattern.assemble(Ke)
-    M = pattern.assemble(Me)
+    K, M = pattern.assemble_many([Ku, Mu], rep)
     if springs is not None:
         k = np.asarray(springs, dtype=float)
         if k.shape != (n_all,):

@@ -97,3 +97,30 @@ def test_bad_dofs(grid):
         SparsityPattern(dofs + len(fi), fi, n_free)
     with pytest.raises(DimensionError, match=r"dofs must have shape \(n_el, n\)"):
         SparsityPattern(dofs.ravel(), fi, n_free)
+
+
+def test_distinct_matrices_and_lazy_position_match_the_entry_sum(grid, rng):
+    """Distinct element matrices with each element's index (``rep``) give the matrices of
+    the summed copies, for K and M at once; the node-graph pattern's lazily computed
+    ``position`` sums the same matrix with ``np.bincount`` (as mvtk.fe._general does)."""
+    dofs, fi, n_free = grid
+    Ku = rng.standard_normal((3, 24, 24))
+    Mu = rng.standard_normal((3, 24, 24))
+    rep = rng.integers(0, 3, size=len(dofs))
+    p = SparsityPattern(dofs, fi, n_free)
+    K, M = p.assemble_many([Ku, Mu], rep)
+    for A, U in ((K, Ku), (M, Mu)):
+        ref = _reference(U[rep], dofs, fi, n_free)
+        assert A.nnz == ref.nnz
+        assert abs(A - ref).max() <= 1e-13 * abs(ref).max()
+        data = np.bincount(p.position, weights=U[rep].ravel(), minlength=p.nnz + 1)
+        B = sp.csr_matrix((data[:p.nnz], p.indices, p.indptr), shape=p.shape)
+        assert abs(B - ref).max() <= 1e-13 * abs(ref).max()
+    # the positions of the node-graph pattern are those of the entry sort
+    generic = SparsityPattern(dofs[:, ::-1], fi, n_free)
+    pos_node = p.position.reshape(len(dofs), 24, 24)[:, ::-1, ::-1].ravel()
+    np.testing.assert_array_equal(pos_node, generic.position)
+    with pytest.raises(DimensionError, match=r"rep must have shape \(49,\)"):
+        p.assemble(Ku, rep[:-1])
+    with pytest.raises(DimensionError, match=r"rep must index 0..2"):
+        p.assemble(Ku, rep + 3)
