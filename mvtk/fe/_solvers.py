@@ -445,6 +445,8 @@ def _drop_uncoupled(A: sp.csc_matrix) -> sp.csc_matrix:
     if np.all(same):
         return A
     keep = same[pair]
+    if keep.all():              # already without them (an assembly that left them out)
+        return A
     take = np.flatnonzero(keep)
     # entries kept before each column's start: the new column pointers
     indptr = np.searchsorted(take, A.indptr)
