@@ -100,8 +100,7 @@ def child_mvtk(n: int, n_modes: int, fill: bool) -> dict:
         lu.solve(b)
     out["solves_2n_s"], out["solves_2n_cpu"] = _since(t)
     # one solve with as many right-hand sides as the block Lanczos of the default uses
-    Bw = np.random.default_rng(0).standard_normal(
-        (model.n_dof, block_width(n_modes, model.n_dof)))
+    Bw = np.random.default_rng(0).standard_normal((model.n_dof, block_width(n_modes)))
     t = _clock()
     for _ in range(10):
         lu.solve(Bw)

@@ -75,11 +75,6 @@ BLOCK_SIZE = 2
 BLOCK_SIZE_MANY = 3
 #: Number of modes above which :data:`BLOCK_SIZE_MANY` is the block width.
 MANY_MODES = 10
-#: Smallest model (DOFs) for :data:`BLOCK_SIZE_MANY`: wider blocks pay off where the
-#: solves dominate, and on a small model whose Krylov space the Lanczos basis may have to
-#: fill (its limit is ``min(n_dof, ...)``) a block must not overrun it (dense random
-#: 34-46-DOF problems, 16 modes: blocks of 3 stopped short more often than blocks of 2).
-MIN_DOF_MANY = 5000
 #: Default relative eigenvalue tolerance of :func:`eigsh_lowest` (see its docstring).
 #: 0 is ARPACK's machine precision. A looser 1e-10 (28 instead of 34-41 solves on the
 #: 90 x 90 plate) converged before every copy of a repeated eigenvalue had emerged (the
@@ -104,14 +99,11 @@ _ORDER_CACHE_SIZE = 8
 
 
 
-def block_width(n_modes: int, n_dof: int) -> int:
-    """Block width of the block Lanczos of :func:`eigsh_lowest` for ``n_modes`` modes of
-    an ``n_dof``-DOF model: :data:`BLOCK_SIZE_MANY` for more than :data:`MANY_MODES`
-    modes of a model of at least :data:`MIN_DOF_MANY` DOFs (fewer, wider solves;
-    measured there), :data:`BLOCK_SIZE` otherwise."""
-    if n_modes > MANY_MODES and n_dof >= MIN_DOF_MANY:
-        return BLOCK_SIZE_MANY
-    return BLOCK_SIZE
+def block_width(n_modes: int) -> int:
+    """Block width of the block Lanczos of :func:`eigsh_lowest` for ``n_modes`` modes:
+    :data:`BLOCK_SIZE` up to :data:`MANY_MODES` modes, :data:`BLOCK_SIZE_MANY` above
+    (fewer, wider solves; measured there)."""
+    return BLOCK_SIZE if n_modes <= MANY_MODES else BLOCK_SIZE_MANY
 
 
 def _cholmod_module():
@@ -807,13 +799,13 @@ def eigsh_lowest(
     method : {"auto", "arpack", "block"}
         ``"arpack"``: ARPACK's implicitly restarted Lanczos, one solve per step.
         ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:func:`block_width`
-        vectors per solve: 3 for more than 10 modes of a model of 5000 DOFs or more, 2
-        otherwise; full M-orthogonalisation, no restart), accepted when every Ritz
-        residual is below ``sqrt(tol)`` (1e-10 for ``tol=0``) relative to its Ritz value;
-        the returned Rayleigh quotients are then as accurate as ARPACK's with ``tol=0``,
-        at the round-off floor of the factorisation (on the 49 140-DOF plate both
-        differ from each other by 5e-11-6e-10, as ARPACK's own results do between the
-        two backends, 8e-11, and between 4 and 10 modes requested, 3e-10).
+        vectors per solve: 2 up to 10 modes, 3 above; full M-orthogonalisation, no
+        restart), accepted when every Ritz residual is below ``sqrt(tol)`` (1e-10 for
+        ``tol=0``) relative to its Ritz value; the returned Rayleigh quotients are then
+        as accurate as ARPACK's with ``tol=0``, at the round-off floor of the
+        factorisation (on the 49 140-DOF plate both differ from each other by
+        5e-11-6e-10, as ARPACK's own results do between the two backends, 8e-11, and
+        between 4 and 10 modes requested, 3e-10).
         ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
         Both keep the Sturm check for missed copies of repeated eigenvalues.
     factorization : Factorization, optional
@@ -867,7 +859,7 @@ def eigsh_lowest(
         used_method = method
         k = n
         if method == "block":
-            width = min(block_width(n, ndof), max(1, ndof // 4))
+            width = min(block_width(n), max(1, ndof // 4))
             start = _start_block(ndof, v0, M, width)
             # the eigenvalue error of a Ritz pair is about the square of its residual
             res_tol = 1e-10 if tol == 0 else float(np.clip(np.sqrt(tol), 1e-10, 1e-2))
@@ -1110,7 +1102,7 @@ def estimate_eigen_memory(
                      + np.sum(s * s + s))
     # the block Lanczos basis and its M-image (first allocation; it grows only when
     # the convergence needs more)
-    basis = 2 * min(n_dof, max(4 * n_modes + 4 * block_width(n_modes, n_dof), 32))
+    basis = 2 * min(n_dof, max(4 * n_modes + 4 * block_width(n_modes), 32))
     matrices = 2 * (nnz_matrix * 12 + (n_dof + 1) * 4)
     solve = (int(FACTOR_BYTES_PER_NNZ * nnz_factor) + 2 * nnz_matrix * 12
              + (basis + 3 * n_modes + 6) * n_dof * 8)
