@@ -65,16 +65,6 @@ BACKENDS = ("auto", "superlu", "cholmod")
 #: :data:`CHOLMOD_SIMPLICIAL`, a block of k right-hand sides cost 0.7-0.9 of k single
 #: solves and the block method lost to ARPACK.)
 BLOCK_SIZE = 2
-#: Block width of the block Lanczos for more than :data:`MANY_MODES` modes. Measured on
-#: the 199 836-DOF plate, 20 modes (CHOLMOD, CPU of the eigen step with a given
-#: factorisation, 3 interleaved runs, load 12-14): blocks of 2: 62 vectors in 31 solves,
-#: 4.2-5.2 s; blocks of 3: 66 in 22 solves, 3.7-4.1 s (a solve of 3 right-hand sides
-#: costs 1.05-1.2 times one of 2); on the 49 140-DOF plate, 20 modes, 29 -> 23 solves,
-#: 0.93-1.06 -> 0.81-1.03 s. For 10 modes the two widths measured alike (200 k DOF:
-#: 2.2-2.4 s each), so :data:`BLOCK_SIZE` stays the width up to 10 modes.
-BLOCK_SIZE_MANY = 3
-#: Number of modes above which :data:`BLOCK_SIZE_MANY` is the block width.
-MANY_MODES = 10
 #: Default relative eigenvalue tolerance of :func:`eigsh_lowest` (see its docstring).
 #: 0 is ARPACK's machine precision. A looser 1e-10 (28 instead of 34-41 solves on the
 #: 90 x 90 plate) converged before every copy of a repeated eigenvalue had emerged (the
@@ -97,13 +87,6 @@ _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
 _ORDER_CACHE_SIZE = 8
 
 
-
-
-def block_width(n_modes: int) -> int:
-    """Block width of the block Lanczos of :func:`eigsh_lowest` for ``n_modes`` modes:
-    :data:`BLOCK_SIZE` up to :data:`MANY_MODES` modes, :data:`BLOCK_SIZE_MANY` above
-    (fewer, wider solves; measured there)."""
-    return BLOCK_SIZE if n_modes <= MANY_MODES else BLOCK_SIZE_MANY
 
 
 def _cholmod_module():
@@ -684,9 +667,6 @@ class EigenSolution:
         Factorisation backend (``"superlu"``, ``"cholmod"`` or ``"dense"``).
     method : str
         Eigen solver: ``"arpack"``, ``"block"`` (block Lanczos) or ``"dense"``.
-    block_width : int
-        Right-hand sides per solve of the block Lanczos (:func:`block_width`; 1 for
-        ARPACK, 0 for the dense path).
     """
 
     omega2: np.ndarray
@@ -695,7 +675,6 @@ class EigenSolution:
     n_solves: int = 0
     backend: str = ""
     method: str = ""
-    block_width: int = 0
 
 
 def _previous_vectors(ndof: int, v0, M) -> np.ndarray:
@@ -798,12 +777,12 @@ def eigsh_lowest(
         See :func:`factorize`.
     method : {"auto", "arpack", "block"}
         ``"arpack"``: ARPACK's implicitly restarted Lanczos, one solve per step.
-        ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:func:`block_width`
-        vectors per solve: 2 up to 10 modes, 3 above; full M-orthogonalisation, no
-        restart), accepted when every Ritz residual is below ``sqrt(tol)`` (1e-10 for
-        ``tol=0``) relative to its Ritz value; the returned Rayleigh quotients are then
-        as accurate as ARPACK's with ``tol=0``, at the round-off floor of the
-        factorisation (on the 49 140-DOF plate both differ from each other by
+        ``"block"``: block Lanczos of :mod:`mvtk.fe._block_eigen` (:data:`BLOCK_SIZE`
+        vectors per solve, full M-orthogonalisation, no restart), accepted when every
+        Ritz residual is below ``sqrt(tol)`` (1e-10 for ``tol=0``) relative to its Ritz
+        value; the returned Rayleigh quotients are then as accurate as ARPACK's with
+        ``tol=0``, at the round-off floor of the factorisation (on the 49 140-DOF plate
+        both differ from each other by
         5e-11-6e-10, as ARPACK's own results do between the two backends, 8e-11, and
         between 4 and 10 modes requested, 3e-10).
         ``"auto"``: the block method, which measured faster (see :data:`BLOCK_SIZE`).
@@ -831,7 +810,7 @@ def eigsh_lowest(
         raise ParameterError(f"tol must be in [0, 1), got {tol!r}")
     if method not in ("auto", "arpack", "block"):
         raise ParameterError(f"method must be 'auto', 'arpack' or 'block', got {method!r}")
-    n_fact, n_solves, used, used_method, width = 0, 0, "dense", "dense", 0
+    n_fact, n_solves, used, used_method = 0, 0, "dense", "dense"
     if n >= ndof - 1:
         import scipy.linalg as sla
 
@@ -859,12 +838,11 @@ def eigsh_lowest(
         used_method = method
         k = n
         if method == "block":
-            width = min(block_width(n), max(1, ndof // 4))
+            width = min(BLOCK_SIZE, max(1, ndof // 4))
             start = _start_block(ndof, v0, M, width)
             # the eigenvalue error of a Ritz pair is about the square of its residual
             res_tol = 1e-10 if tol == 0 else float(np.clip(np.sqrt(tol), 1e-10, 1e-2))
         else:
-            width = 1
             start = _start_vector(ndof, v0, M)
         for attempt in range(3):
             if method == "block":
@@ -905,8 +883,6 @@ def eigsh_lowest(
                 "of K - tau M); request more modes")
         w, v = w[:n], v[:, :n]
         n_solves = lu.n_solves - solves0
-        if method == "block":
-            width = start.shape[1]
     # mass-normalise explicitly (eigsh returns M-orthonormal vectors already, up to
     # round-off; the dense path does too, but be explicit and fix a sign convention)
     mnorm = np.sqrt(np.einsum("ij,ij->j", v, M @ v))
@@ -927,7 +903,7 @@ def eigsh_lowest(
     big = np.argmax(np.abs(v), axis=0)
     v = v * np.sign(v[big, np.arange(v.shape[1])])
     return EigenSolution(omega2=w, vectors=v, n_factorizations=n_fact, n_solves=n_solves,
-                         backend=used, method=used_method, block_width=width)
+                         backend=used, method=used_method)
 
 
 def _cluster_scale(w: np.ndarray, sigma: float) -> np.ndarray:
@@ -1102,7 +1078,7 @@ def estimate_eigen_memory(
                      + np.sum(s * s + s))
     # the block Lanczos basis and its M-image (first allocation; it grows only when
     # the convergence needs more)
-    basis = 2 * min(n_dof, max(4 * n_modes + 4 * block_width(n_modes), 32))
+    basis = 2 * min(n_dof, max(4 * n_modes + 4 * BLOCK_SIZE, 32))
     matrices = 2 * (nnz_matrix * 12 + (n_dof + 1) * 4)
     solve = (int(FACTOR_BYTES_PER_NNZ * nnz_factor) + 2 * nnz_matrix * 12
              + (basis + 3 * n_modes + 6) * n_dof * 8)

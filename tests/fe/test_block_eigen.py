@@ -169,22 +169,3 @@ def test_block_free_free_curved_panel_six_rigid_modes_below_a_close_shift():
     np.testing.assert_allclose(sol.omega2[6:], ref.omega2[6:], rtol=1e-8)
     assert S._clustered(sol.omega2[:6], shift) and not S._clustered(sol.omega2[:6], 0.0)
     assert fe.modal_analysis(model, 10).rigid.sum() == 6
-
-
-@pytest.mark.parametrize("backend", BACKENDS)
-def test_many_modes_use_wider_blocks_and_match_dense(backend):
-    """More than MANY_MODES modes: blocks of BLOCK_SIZE_MANY vectors (fewer solves), the
-    eigenvalues those of a dense shift-invert of the same plate (a square cantilever
-    plate, 726 DOF); up to MANY_MODES the width stays BLOCK_SIZE."""
-    model = fe.plate_model(1.0, 1.0, [fe.Ply(STEEL, 0.01)], nx=10, ny=10, clamp="x0")
-    n = S.MANY_MODES + 10
-    sol = fe.eigsh_lowest(model.K, model.M, n, backend=backend)
-    assert sol.block_width == S.BLOCK_SIZE_MANY == S.block_width(n)
-    assert sol.n_solves % S.BLOCK_SIZE_MANY == 0
-    ref = _dense_lowest(model.K, model.M, n)
-    np.testing.assert_allclose(sol.omega2, ref, rtol=1e-9)
-    _check_modes(sol, model.K, model.M, n)
-    few = fe.eigsh_lowest(model.K, model.M, S.MANY_MODES, backend=backend)
-    assert few.block_width == S.BLOCK_SIZE
-    np.testing.assert_allclose(few.omega2, ref[:S.MANY_MODES], rtol=1e-9)
-    assert fe.eigsh_lowest(model.K, model.M, 3, method="arpack").block_width == 1
