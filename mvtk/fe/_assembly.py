@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.csgraph  # noqa: F401  (sp.csgraph)
 
 from ..errors import DimensionError, ParameterError
 from ._laminate import Laminate
@@ -31,8 +32,8 @@ class SparsityPattern:
     """CSR sparsity pattern of element matrices summed over a DOF map, reusable.
 
     Built once per connectivity and constraint set; :meth:`assemble` then sums any
-    element matrices of that mesh (K, M, or new values after a parameter change) with
-    one ``np.bincount`` over precomputed positions, without sorting anything.
+    element matrices of that mesh (K, M, or new values after a parameter change) over
+    precomputed positions, without sorting anything.
 
     When the element DOFs come in node blocks (``dofs[e, b*s:b*s+b] = b*node + 0..b-1``,
     as for 6-DOF shells and beams) and the free DOFs are numbered in global order, the
@@ -40,7 +41,15 @@ class SparsityPattern:
     sorted (a few hundred thousand for a 50 000-DOF shell model instead of 4.7 million
     matrix entries) and the DOF-level CSR arrays are index arithmetic. Otherwise the
     matrix-entry keys are sorted (``np.unique``). Both give the same CSR matrix with
-    sorted column indices, and every entry is summed in element order.
+    sorted column indices.
+
+    Summation: on a node-graph pattern the ``b x b`` blocks of the elements are summed
+    per node pair by one sparse product (the pair-by-element-block incidence times the
+    blocks), and each pair's block is then written to its CSR positions; with distinct
+    element matrices and the index of each element's one (``rep``), the incidence
+    counts the elements that share a matrix, so the ``n_el`` element matrices are never
+    formed (a 1 000 000-DOF plate would hold 1.5 GB of them). Otherwise the entries
+    are summed with one ``np.bincount`` over :attr:`position`, in element order.
 
     Parameters
     ----------
@@ -49,6 +58,12 @@ class SparsityPattern:
     free_index : ndarray (n_all,)
         Free DOF number of every global DOF, -1 for constrained ones.
     n_free : int
+    kinds : ndarray of int (b,), optional
+        Kind of each DOF of a node block (e.g. membrane and bending DOFs of a flat
+        shell): entries between DOFs of different kinds are structurally zero and left
+        out of a node-graph pattern whose block size is ``b`` (then :meth:`assemble`
+        refuses element matrices with a nonzero there). Default: one kind (every entry
+        of an element's node-pair blocks). Other patterns keep every entry.
 
     Attributes
     ----------
@@ -56,7 +71,8 @@ class SparsityPattern:
         CSR structure (sorted column indices) of the ``n_free x n_free`` matrix.
     position : ndarray (n_el * n * n,)
         Index into the CSR data of each element-matrix entry (``nnz`` for entries on a
-        constrained DOF, which are dropped).
+        constrained DOF, which are dropped); for a node-graph pattern computed on
+        first use.
 
     Examples
     --------
@@ -69,7 +85,8 @@ class SparsityPattern:
            [-1.,  1.]])
     """
 
-    def __init__(self, dofs: np.ndarray, free_index: np.ndarray, n_free: int):
+    def __init__(self, dofs: np.ndarray, free_index: np.ndarray, n_free: int,
+                 kinds: np.ndarray | None = None):
         dofs = np.asarray(dofs, dtype=np.int64)
         free_index = np.asarray(free_index, dtype=np.int64)
         if dofs.ndim != 2:
@@ -84,7 +101,11 @@ class SparsityPattern:
         self.element_shape = dofs.shape
         block = _node_block(dofs, free_index, self.n_free)
         if block:
-            self._from_node_graph(dofs, free_index, block)
+            kinds = (np.zeros(block, dtype=np.int64) if kinds is None
+                     else np.asarray(kinds, dtype=np.int64).ravel())
+            if kinds.shape != (block,):
+                kinds = np.zeros(block, dtype=np.int64)
+            self._from_node_graph(dofs, free_index, block, kinds)
         else:
             self._from_entries(dofs, free_index)
         self.nnz = len(self.indices)
@@ -104,63 +125,168 @@ class SparsityPattern:
         self.indices = uniq % n_free
         row_of = uniq // n_free
         self.indptr = np.searchsorted(row_of, np.arange(n_free + 1))
-        self.position = np.full(rows.shape, len(uniq), dtype=np.intp)
-        self.position[keep] = inverse.ravel()
+        self._position = np.full(rows.shape, len(uniq), dtype=np.intp)
+        self._position[keep] = inverse.ravel()
+        self._gather = None
 
-    def _from_node_graph(self, dofs, free_index, b):
+    def _from_node_graph(self, dofs, free_index, b, kinds):
         n_el, n = dofs.shape
         s = n // b
         n_nodes = len(free_index) // b
+        n_free = self.n_free
         nodes = dofs[:, ::b] // b                                    # (n_el, s)
-        node_free = (free_index.reshape(n_nodes, b) >= 0)
-        width = node_free.sum(axis=1)                                # free DOFs per node
-        first = np.zeros(n_nodes + 1, dtype=np.int64)
-        np.cumsum(width, out=first[1:])                              # first free DOF
+        fi = free_index.reshape(n_nodes, b)
         pair_key = (nodes[:, :, None] * np.int64(n_nodes) + nodes[:, None, :]).ravel()
         upair, pinv = np.unique(pair_key, return_inverse=True)
         P, Q = upair // n_nodes, upair % n_nodes
-        w = width[Q]
-        cw = np.zeros(len(upair) + 1, dtype=np.int64)
-        np.cumsum(w, out=cw[1:])
-        pstart = np.searchsorted(P, np.arange(n_nodes + 1))         # pairs of node p
-        row_len_node = cw[pstart[1:]] - cw[pstart[:-1]]
-        offset = cw[:-1] - cw[pstart[P]]                             # pair offset in row
-        free_node = np.repeat(np.arange(n_nodes), width)             # node of each row
-        row_len = row_len_node[free_node]
-        indptr = np.zeros(self.n_free + 1, dtype=np.int64)
+        n_pairs = len(upair)
+        pstart = np.searchsorted(P, np.arange(n_nodes + 1))         # pairs of node P
+        # Per DOF kind k: the row of a free DOF of kind k of node P holds, pair by pair
+        # (P, Q) in Q order, the free DOFs of kind k of Q (ascending: sorted columns).
+        # Its column list is a run of the kind's template (the free kind-k DOFs of the
+        # Q of every pair, in pair order), the same run for every kind-k row of P.
+        row_len = np.zeros(n_free, dtype=np.int64)
+        row_start = np.zeros(n_free, dtype=np.int64)
+        offset = np.zeros((b, n_pairs), dtype=np.int64)   # pair offset in the rows of a
+        rank = np.zeros((n_nodes, b), dtype=np.int64)     # column rank within its kind
+        templates, t0 = [], 0
+        for k in np.unique(kinds):
+            cols = np.flatnonzero(kinds == k)
+            sub = fi[:, cols]                                        # (n_nodes, b_k)
+            ok = sub >= 0
+            rank[:, cols] = np.cumsum(ok, axis=1) - 1
+            cw = np.zeros(n_pairs + 1, dtype=np.int64)
+            np.cumsum(ok.sum(axis=1)[Q], out=cw[1:])
+            t = sub[Q].ravel()
+            templates.append(t[t >= 0])
+            offset[cols] = cw[:-1] - cw[pstart[P]]
+            rows, rnode = sub[ok], np.nonzero(ok)[0]
+            row_len[rows] = (cw[pstart[1:]] - cw[pstart[:-1]])[rnode]
+            row_start[rows] = t0 + cw[pstart[rnode]]
+            t0 += cw[-1]
+        template = np.concatenate(templates)
+        indptr = np.zeros(n_free + 1, dtype=np.int64)
         np.cumsum(row_len, out=indptr[1:])
         nnz = int(indptr[-1])
-        # node row template: columns of every pair, in pair order
-        template = np.repeat(first[Q] - cw[:-1], w) + np.arange(cw[-1])
-        start = cw[pstart[free_node]]
-        self.indices = template[np.repeat(start - indptr[:-1], row_len) + np.arange(nnz)]
+        self.indices = template[np.repeat(row_start - indptr[:-1], row_len)
+                                + np.arange(nnz)]
         self.indptr = indptr
-        # position of every element entry (e, i=(si, a), j=(sj, c))
-        fi = free_index[dofs].reshape(n_el, s, b)
-        bad = fi < 0
-        rank = fi - first[nodes][:, :, None]                          # (n_el, s, b)
-        base = indptr[np.maximum(fi, 0)]                              # (n_el, s, b)
-        # an entry in the row or column of a constrained DOF gets a position >= nnz
-        # (base or rank set to nnz, the other terms >= 0), clipped to nnz below
-        rank[bad] = nnz
-        base[bad] = nnz
-        pos = (base[:, :, :, None, None]
-               + offset[pinv].reshape(n_el, s, 1, s, 1)
-               + rank[:, None, None, :, :])
-        if np.any(bad):
-            np.minimum(pos, nnz, out=pos)
-        self.position = pos.reshape(-1).astype(np.intp, copy=False)
+        # CSR position of every entry (a, c) of every node-pair block p = (P, Q): row
+        # DOF a of P, column DOF c of Q; entries on a constrained DOF or between
+        # different kinds are not in the pattern
+        itype = np.int32 if 2 * nnz < 2**31 - 1 else np.int64
+        base = indptr[np.maximum(fi, 0)]                             # (n_nodes, b)
+        pos = np.add(base[P][:, :, None], rank[Q][:, None, :], dtype=itype)
+        pos += offset.T.astype(itype)[:, :, None]
+        valid = (fi[P] >= 0)[:, :, None] & (fi[Q] >= 0)[:, None, :]
+        valid &= (kinds[:, None] == kinds[None, :])[None]
+        # the inverse: for every CSR entry, its (pair, a, c) in the pair blocks (each
+        # entry is in exactly one pair block), so that the data are one np.take
+        valid = np.flatnonzero(valid.ravel())
+        self._gather = np.empty(nnz, dtype=itype)
+        self._gather[pos.ravel()[valid]] = valid
+        self._pair_of = pinv.ravel().astype(itype, copy=False)      # (n_el * s * s,)
+        self._n_pairs = n_pairs
+        self._block = (s, b)
+        self._kinds = kinds
+        self._position = None
 
-    def assemble(self, Ke: np.ndarray) -> sp.csr_matrix:
-        """Sum element matrices ``Ke`` (n_el, n, n) into a CSR matrix on this pattern."""
-        Ke = np.asarray(Ke, dtype=float)
-        if Ke.shape != (*self.element_shape, self.element_shape[1]):
-            n_el, n = self.element_shape
-            raise DimensionError(
-                f"element matrices must have shape ({n_el}, {n}, {n}), got {Ke.shape}"
-            )
-        data = np.bincount(self.position, weights=Ke.reshape(-1), minlength=self.nnz + 1)
-        return sp.csr_matrix((data[: self.nnz], self.indices, self.indptr), shape=self.shape)
+    @property
+    def position(self) -> np.ndarray:
+        """Index into the CSR data of each element-matrix entry, shape (n_el * n * n,)
+        (``nnz`` for entries on a constrained DOF); computed on first use."""
+        if self._position is None:
+            s, b = self._block
+            n_el = self.element_shape[0]
+            pair_position = np.full(self._n_pairs * b * b, self.nnz, dtype=np.intp)
+            pair_position[self._gather] = np.arange(self.nnz)
+            pos = pair_position.reshape(self._n_pairs, b * b)[self._pair_of]
+            pos = pos.reshape(n_el, s, s, b, b)
+            self._position = pos.transpose(0, 1, 3, 2, 4).reshape(-1).astype(
+                np.intp, copy=False)
+        return self._position
+
+    def _pair_sums(self, mats, rep):
+        """Node-pair block sums of element matrices (node-graph patterns): one sparse
+        product of the (pair x element-block) incidence with the element blocks of all
+        matrices in ``mats``, shape (n_pairs, n_mats * b * b)."""
+        s, b = self._block
+        n_el = self.element_shape[0]
+        n_u = len(mats[0])
+        # blocks (element or distinct element u, node pair si, sj) x (matrix, a, c)
+        blocks = np.stack([m.reshape(n_u, s, b, s, b).transpose(0, 1, 3, 2, 4)
+                           for m in mats], axis=3).reshape(n_u * s * s, len(mats) * b * b)
+        cross = self._kinds[:, None] != self._kinds[None, :]
+        if np.any(cross) and np.any(
+                blocks.reshape(n_u * s * s, len(mats), b, b)[:, :, cross]):
+            raise ParameterError(
+                "element matrices couple DOFs of different kinds, which this sparsity "
+                f"pattern leaves out (kinds {self._kinds.tolist()} per node)")
+        owner = np.arange(n_el) if rep is None else rep
+        col = (owner[:, None] * (s * s) + np.arange(s * s)).ravel()
+        n_pairs = self._n_pairs
+        # the incidence summed over elements sharing a distinct matrix (a count per
+        # pair and block), so that every distinct block is read, not copied per element
+        inc = sp.csr_matrix((np.ones(len(col)), (self._pair_of, col)),
+                            shape=(n_pairs, n_u * s * s))
+        return inc @ blocks
+
+    def assemble_many(self, mats, rep: np.ndarray | None = None) -> list[sp.csr_matrix]:
+        """Sum several sets of element matrices (e.g. K and M) into CSR matrices.
+
+        Parameters
+        ----------
+        mats : sequence of ndarray
+            Each of shape (n_el, n, n), the matrix of every element; or, with ``rep``,
+            (n_u, n, n), the distinct element matrices.
+        rep : ndarray of int (n_el,), optional
+            Index into the distinct matrices of each element (structured meshes have a
+            handful of distinct elements): they are summed without an array of
+            ``n_el`` element matrices.
+
+        Returns
+        -------
+        list of scipy.sparse.csr_matrix
+        """
+        n_el, n = self.element_shape
+        mats = [np.asarray(m, dtype=float) for m in mats]
+        if rep is not None:
+            rep = np.asarray(rep, dtype=np.int64)
+            if rep.shape != (n_el,):
+                raise DimensionError(f"rep must have shape ({n_el},), got {rep.shape}")
+        for m in mats:
+            n_u = n_el if rep is None else len(mats[0])
+            if m.shape != (n_u, n, n):
+                raise DimensionError(
+                    f"element matrices must have shape ({n_u}, {n}, {n}), got {m.shape}")
+        if rep is not None and rep.size and (rep.min() < 0 or rep.max() >= len(mats[0])):
+            raise DimensionError(f"rep must index 0..{len(mats[0]) - 1}")
+        out = []
+        if self._gather is not None:
+            sums = self._pair_sums(mats, rep).ravel()
+            bb = self._block[1] ** 2
+            # entry j of the block of pair p, matrix k: sums[p * n_mats * bb + k * bb + j]
+            idx = (self._gather // bb).astype(np.intp)
+            idx *= len(mats) * bb
+            idx += self._gather % bb
+            for _ in mats:
+                data = np.take(sums, idx)
+                idx += bb
+                out.append(sp.csr_matrix((data, self.indices, self.indptr),
+                                         shape=self.shape))
+            return out
+        for m in mats:
+            Ke = m if rep is None else m[rep]
+            data = np.bincount(self.position, weights=Ke.reshape(-1),
+                               minlength=self.nnz + 1)
+            out.append(sp.csr_matrix((data[: self.nnz], self.indices, self.indptr),
+                                     shape=self.shape))
+        return out
+
+    def assemble(self, Ke: np.ndarray, rep: np.ndarray | None = None) -> sp.csr_matrix:
+        """Sum element matrices ``Ke`` (n_el, n, n) into a CSR matrix on this pattern (or
+        distinct matrices ``Ke`` (n_u, n, n) with ``rep``: see :meth:`assemble_many`)."""
+        return self.assemble_many([Ke], rep)[0]
 
 
 def _node_block(dofs: np.ndarray, free_index: np.ndarray, n_free: int) -> int:
@@ -179,12 +305,14 @@ def _node_block(dofs: np.ndarray, free_index: np.ndarray, n_free: int) -> int:
     return 0
 
 
-def sparsity_pattern(dofs: np.ndarray, free_index: np.ndarray, n_free: int) -> SparsityPattern:
+def sparsity_pattern(dofs: np.ndarray, free_index: np.ndarray, n_free: int,
+                     kinds: np.ndarray | None = None) -> SparsityPattern:
     """:class:`SparsityPattern` for a connectivity, from a small cache when seen before.
 
-    The cache key is a hash of ``dofs``, ``free_index`` and ``n_free`` (the connectivity
-    and constraints), so rebuilding a model with new material or thickness values (model
-    updating, Monte Carlo) reuses the pattern; the last four patterns are kept.
+    The cache key is a hash of ``dofs``, ``free_index``, ``n_free`` and ``kinds`` (the
+    connectivity, constraints and uncoupled DOF kinds), so rebuilding a model with new
+    material or thickness values (model updating, Monte Carlo) reuses the pattern; the
+    last four patterns are kept.
 
     Examples
     --------
@@ -203,10 +331,13 @@ def sparsity_pattern(dofs: np.ndarray, free_index: np.ndarray, n_free: int) -> S
                       dtype=np.int64).tobytes())
     h.update(dofs.tobytes())
     h.update(free_index.tobytes())
+    if kinds is not None:
+        h.update(b"kinds")
+        h.update(np.ascontiguousarray(kinds, dtype=np.int64).tobytes())
     key = h.digest()
     pattern = _PATTERN_CACHE.get(key)
     if pattern is None:
-        pattern = SparsityPattern(dofs, free_index, n_free)
+        pattern = SparsityPattern(dofs, free_index, n_free, kinds)
         _PATTERN_CACHE[key] = pattern
         while len(_PATTERN_CACHE) > _PATTERN_CACHE_SIZE:
             _PATTERN_CACHE.popitem(last=False)
@@ -249,6 +380,22 @@ def assemble_element_matrices(
            [ 0., -1.,  1.]])
     """
     return sparsity_pattern(dofs, free_index, n_free).assemble(Ke)
+
+
+def _dof_kinds(mats, b: int) -> np.ndarray | None:
+    """Classes of the ``b`` DOFs of a node that the element matrices ``mats`` (each
+    (n_u, n, n)) never couple, directly or through other DOFs of the class: the
+    membrane (ux, uy, rz) and bending (uz, rx, ry) DOFs of flat shells in a plane of
+    constant z with a symmetric laminate. None when every DOF couples with every other."""
+    n = mats[0].shape[1]
+    s = n // b
+    link = np.zeros((b, b), dtype=bool)
+    for m in mats:
+        nz = m.reshape(len(m), s, b, s, b) != 0
+        link |= nz.any(axis=(0, 1, 3))
+    n_comp, kinds = sp.csgraph.connected_components(sp.csr_matrix(link | link.T),
+                                                    directed=False)
+    return None if n_comp == 1 else kinds.astype(np.int64)
 
 
 def _unique_elements(xy: np.ndarray, section: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -346,7 +493,6 @@ def assemble_shell_model(
     hs = np.stack([s.H for s in sections])[sec]
     inertia = np.array([[s.I0, s.I1, s.I2] for s in sections])[sec]
     Ku, Mu = mitc4_matrices(xy[first], abd, hs, inertia, drill_factor)
-    Ke, Me = Ku[rep], Mu[rep]
 
     n_all = n_nodes * 6
     fixed = np.zeros(n_all, dtype=bool)
@@ -362,9 +508,8 @@ def assemble_shell_model(
     free_index = np.full(n_all, -1, dtype=np.int64)
     free_index[free] = np.arange(len(free))
     dofs = (elements[:, :, None] * 6 + np.arange(6)[None, None, :]).reshape(len(elements), 24)
-    pattern = sparsity_pattern(dofs, free_index, len(free))
-    K = pattern.assemble(Ke)
-    M = pattern.assemble(Me)
+    pattern = sparsity_pattern(dofs, free_index, len(free), _dof_kinds([Ku, Mu], 6))
+    K, M = pattern.assemble_many([Ku, Mu], rep)
     if springs is not None:
         k = np.asarray(springs, dtype=float)
         if k.shape != (n_all,):

@@ -145,10 +145,11 @@ def _positive_int(name: str, value) -> int:
     return int(value)
 
 
-#: Bytes per element of the assembly peak (element matrices K and M, the sparsity keys and
-#: their sort for 24x24 MITC4 matrices; tracemalloc peak of plate_model, 2500 and 10^4
-#: elements: 54.6 kB per element).
-_BYTES_PER_ELEMENT = 55_000
+#: Bytes per element of the assembly peak beyond K and M (node-pair keys and their sort,
+#: CSR positions, the node-pair block sums of K and M; tracemalloc peak of plate_model
+#: less 12 bytes per stored entry of K and M, 600 and 15 000 elements: 7.1-7.4 kB per
+#: element with a symmetric laminate, 8.4-8.6 kB with an unsymmetric one).
+_BYTES_PER_ELEMENT = 9_000
 #: Bytes per non-zero of K and M in CSR (value + column index, twice).
 _BYTES_PER_NNZ = 24
 
@@ -163,7 +164,9 @@ class ModelSize:
         Nodes, elements and DOFs (6 per node, before supports).
     nnz : int
         Estimated non-zeros of the stiffness matrix over all DOFs (each node pair
-        sharing an element couples 6 x 6 DOFs).
+        sharing an element couples 6 x 6 DOFs); an upper bound: a flat plate with a
+        symmetric laminate stores half of them (its membrane and bending DOFs do not
+        couple, see :class:`mvtk.fe.SparsityPattern`).
     bytes : int
         Estimated peak memory of the assembly (element matrices, sparsity pattern, K and M).
 

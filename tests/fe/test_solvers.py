@@ -26,10 +26,14 @@ def _laplacian_2d(n):
 def test_metis_ordering_is_a_permutation_keeping_node_dofs_together(plate):
     p = S.fill_reducing_ordering(plate.K, "metis")
     assert np.array_equal(np.sort(p), np.arange(plate.n_dof))
-    # DOFs of one node stay consecutive and in order
-    node = plate.dof_node[p]
-    starts = np.flatnonzero(np.r_[True, node[1:] != node[:-1]])
-    assert len(starts) == len(np.unique(plate.dof_node))
+    # DOFs of one supervariable stay consecutive and in order: on this flat plate the
+    # membrane (ux, uy, rz) and the bending (uz, rx, ry) DOFs of a node, which its K does
+    # not couple (nor store)
+    group = 2 * plate.dof_node + np.isin(plate.dof_component, (2, 3, 4))
+    g = group[p]
+    starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+    assert len(starts) == len(np.unique(group))
+    assert np.all(np.diff(p)[g[1:] == g[:-1]] > 0)
     assert S.fill_reducing_ordering(plate.K, "mmd") is None
     assert S.fill_reducing_ordering(plate.K) is p          # cached per pattern
 
@@ -172,8 +176,11 @@ def test_memory_estimate_predicts_superlu_storage(plate):
     G = sp.csr_matrix((np.ones(len(r)), (r, c)), shape=(plate.n_nodes,) * 2)
     nfree = np.bincount(plate.dof_node, minlength=plate.n_nodes)
     est2 = fe.estimate_eigen_memory(G, 10, dofs_per_vertex=nfree)
-    full = sp.csc_matrix((np.ones(plate.K.nnz), plate.K.indices, plate.K.indptr),
-                         shape=plate.K.shape)
+    # the fully coupled pattern: every 6 x 6 node-pair block (K itself stores only
+    # the membrane and bending entries of a flat plate)
+    free = plate.dof_node * 6 + plate.dof_component
+    full = sp.kron(G, np.ones((6, 6))).tocsr()[free][:, free].tocsc()
+    assert full.nnz == 2 * plate.K.nnz
     est_full = fe.estimate_eigen_memory(full, 10)
     assert est2.nnz_factor == est_full.nnz_factor and est2.total == est_full.total
     assert est2.nnz_factor > 1.5 * est.nnz_factor       # flat plate: about 2x
@@ -215,11 +222,24 @@ def test_uncoupled_zeros_are_dropped_by_kind_not_by_value(plate):
     (and only zeros), halving SuperLU's storage; zeros inside a coupled kind (couplings
     that vanish by the symmetry of the regular mesh) are kept, so the pattern is the
     mesh's; a shell whose fields couple keeps every entry."""
-    K = sp.csc_matrix(plate.K)
+    # K on the fully coupled pattern (every 6 x 6 node-pair block, as an assembly that
+    # does not leave the membrane-bending entries out stores it)
+    el = plate.elements["mitc4"]
+    G = sp.csr_matrix((np.ones(16 * len(el)), (np.repeat(el, 4, axis=1).ravel(),
+                                               np.tile(el, (1, 4)).ravel())),
+                      shape=(plate.n_nodes,) * 2)
+    free = plate.dof_node * 6 + plate.dof_component
+    pat = sp.kron(G, np.ones((6, 6))).tocsr()[free][:, free].tocoo()
+    K = sp.csc_matrix((plate.K.toarray()[pat.row, pat.col], (pat.row, pat.col)),
+                      shape=plate.K.shape)
     K.sort_indices()
+    assert K.nnz == 2 * plate.K.nnz and abs(K - plate.K).max() == 0.0
     K0 = S._drop_uncoupled(K)
     assert abs(K0 - K).max() == 0.0                       # only zeros dropped
     assert K0.nnz < 0.55 * K.nnz
+    # exactly the entries plate_model's assembly stores (it leaves the others out)
+    np.testing.assert_array_equal(K0.indptr, plate.K.indptr)
+    np.testing.assert_array_equal(K0.indices, plate.K.indices)
     assert np.count_nonzero(K0.data == 0) > 0             # symmetric-mesh zeros kept
     c = plate.dof_component
     membrane, bending = np.isin(c, (0, 1, 5)), np.isin(c, (2, 3, 4))
