@@ -435,11 +435,11 @@ def half_power(
             "no resonance peak to measure"
         )
     coh = _coherence(spectrum, None, f.size)
+    weak: dict[float, float] = {}
     if fn_hz is None:
         peaks = find_peaks(spectrum, f_hz, n_peaks=n_modes, fmin=fmin, fmax=fmax,
                            power=power, coherence=coh, max_peaks=max_modes)
         targets = peaks.fn_hz
-        weak: dict[float, float] = {}
         if n_modes is None and targets.size < max_modes:
             # resonances standing 3..6 dB out of their surroundings (a weak mode on the
             # flank of a strong one: acceleration.lvm's 2779.7 Hz, 5 dB) get a row
@@ -503,7 +503,11 @@ def half_power(
                     fn, z = (float(v) for v in exponential_window_correction(fn, z, tau))
                 band = f2 - f1
                 nl = band / df
-                others = np.delete(targets, m)
+                # weak-peak rows (3..6 dB out of their surroundings) do not make a
+                # neighbour overlapped: so small a resonance hardly moves another
+                # mode's -3 dB points
+                others = np.array([t for i, t in enumerate(targets)
+                                   if i != m and float(t) not in weak])
                 near = others[np.argmin(np.abs(others - fn))] if others.size else np.nan
                 if others.size and abs(near - fn) < overlap_factor * band:
                     quality = "overlap"
