@@ -12,7 +12,7 @@ from ._figures import (
     plot_time_responses,
 )
 from ._histogram import plot_fn_histogram
-from ._modal import plot_automac, plot_frf_synthesis, plot_stabilisation
+from ._modal import plot_automac, plot_frf_synthesis, plot_modal_uncertainty, plot_stabilisation
 
 __all__ = [
     "figure_to_png",
@@ -28,6 +28,7 @@ __all__ = [
     "plot_stabilisation",
     "plot_frf_synthesis",
     "plot_automac",
+    "plot_modal_uncertainty",
     "plot_fn_histogram",
     "mesh_edges",
     "mode_animation_html",

@@ -1,4 +1,5 @@
-"""Figures of experimental modal analysis: stabilisation diagram, FRF synthesis, AutoMAC."""
+"""Figures of experimental modal analysis: stabilisation diagram, FRF synthesis, AutoMAC,
+damping against frequency with error bars."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from ._figures import FIG_WIDTH, _plain_log_axis, _sparse_log_minor, minmax_deci
 from ._figures import _constrained_figure as _figure
 from ._layout import axes_at, figure
 
-__all__ = ["plot_stabilisation", "plot_frf_synthesis", "plot_automac"]
+__all__ = ["plot_stabilisation", "plot_frf_synthesis", "plot_automac", "plot_modal_uncertainty"]
 
 _STYLE = {"s": ("C3", "o", "stable f, zeta, vector"), "v": ("C2", "^", "stable f, vector"),
           "d": ("C1", "s", "stable f, zeta"), "f": ("C0", "x", "stable f"),
@@ -210,4 +211,69 @@ def plot_automac(modes, *, real: bool = False, title: str = ""):
     ax.set_xlabel("mode [Hz]")
     ax.set_ylabel("mode [Hz]")
     ax.set_title(title or "AutoMAC")
+    return fig
+
+
+def plot_modal_uncertainty(modes, *, k: float = 2.0, title: str = ""):
+    """Damping against frequency of the identified modes with their error bars.
+
+    Each mode is a point at ``(fn_hz, 100 zeta)`` with bars of ``+-k`` standard
+    deviations (``fn_std_hz`` horizontally, ``zeta_std`` vertically; default ``k = 2``,
+    about a 95 % interval); reliable modes are filled, the others hollow. Modes without
+    a standard deviation (NaN) have no bar. Where a bar is smaller than the marker the
+    parameter is known better than the figure can show (read the table).
+
+    Parameters
+    ----------
+    modes : IdentifiedModes
+        Result of :func:`mvtk.modal.identify` or :func:`mvtk.modal.identify_output_only`.
+    k : float
+        Coverage factor of the bars, in standard deviations (> 0).
+    title : str
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> from mvtk import modal
+    >>> K = np.array([[2e5, -1e5], [-1e5, 1e5]])
+    >>> h = modal.exact_frf(np.eye(2), 0.5 * np.eye(2), K, np.arange(0.0, 120.0, 0.25),
+    ...                     [0, 1], [0])
+    >>> fig = plot_modal_uncertainty(modal.identify(h, 2.0, 110.0))
+    >>> fig.axes[0].get_ylabel()
+    'damping ratio zeta [%]'
+    """
+    if not (np.isfinite(k) and k > 0):
+        raise ParameterError(f"k must be a coverage factor > 0, got {k!r}")
+    fn = np.asarray(modes.fn_hz, dtype=float)
+    zeta = np.asarray(modes.zeta, dtype=float)
+    n = fn.size
+    fstd = np.asarray(modes.fn_std_hz if modes.fn_std_hz is not None else np.full(n, np.nan),
+                      dtype=float)
+    zstd = np.asarray(modes.zeta_std if modes.zeta_std is not None else np.full(n, np.nan),
+                      dtype=float)
+    reliable = np.asarray(modes.reliable, dtype=bool)
+    fig = _figure(FIG_WIDTH, 3.6)
+    ax = fig.add_subplot()
+    for ok, face, label in ((True, "C0", "reliable"), (False, "none", "not reliable")):
+        sel = reliable == ok
+        if not sel.any():
+            continue
+        ax.errorbar(fn[sel], 100 * zeta[sel],
+                    xerr=np.nan_to_num(k * fstd[sel]), yerr=np.nan_to_num(k * 100 * zstd[sel]),
+                    fmt="o", color="C0", mfc=face, ms=5, capsize=3, lw=1,
+                    label=f"{label} (bars +-{k:g} std)")
+    for f, z in zip(fn, zeta):
+        ax.annotate(f"{f:.4g}", (f, 100 * z), textcoords="offset points", xytext=(4, 4),
+                    fontsize=8)
+    ax.set_xlabel("frequency fn [Hz]")
+    ax.set_ylabel("damping ratio zeta [%]")
+    ax.set_ylim(bottom=0)
+    if n:
+        ax.legend(fontsize=8, loc="best")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title or "Identified modes with uncertainty")
     return fig

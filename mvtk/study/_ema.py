@@ -183,7 +183,7 @@ def modal(study):
     """
     import xarray as xr
 
-    from mvtk.plot import plot_frf_synthesis, plot_stabilisation
+    from mvtk.plot import plot_frf_synthesis, plot_modal_uncertainty, plot_stabilisation
 
     from ._config import multipoint_file
 
@@ -197,6 +197,7 @@ def modal(study):
     figures = {
         "stabilisation": _png(plot_stabilisation(res.diagram, res)),
         "synthesis": _png(plot_frf_synthesis(res)),
+        "uncertainty": _png(plot_modal_uncertainty(res)),
     }
     result = {**_test_summary(frf, res, note, source, band), "figures": figures,
               "warnings": [f"{w.category.__name__}: {w.message}" for w in caught]}

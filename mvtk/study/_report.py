@@ -1055,6 +1055,11 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
     sec.figure(_png(mod["figures"]["stabilisation"]),
                "Stabilisation diagram (CMIF behind); dashed: selected modes")
     sec.figure(_png(mod["figures"]["synthesis"]), "Measured vs synthesised FRFs")
+    if "uncertainty" in mod["figures"]:
+        sec.figure(_png(mod["figures"]["uncertainty"]),
+                   "Identified damping against frequency, bars +-2 standard deviations "
+                   "(fn_std_hz, zeta_std: first-order, from the FRF fit residual); hollow: "
+                   "not reliable")
     for name, t in (mod.get("tests") or {}).items():
         n_common = (t["comparison"]["n_common_dofs"] or [0])[0]
         sec.text(f"Multi-point test {name}, {t['file']}: {t['n_responses']} responses x "

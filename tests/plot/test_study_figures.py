@@ -348,3 +348,32 @@ def test_frf_with_coherence_and_close_peak_labels_stays_readable():
     y = fig.axes[1].lines[0].get_ydata()
     assert min(y) == pytest.approx(0.5, abs=1e-3)              # the dip is drawn
     assert_readable(fig)
+
+
+def test_modal_uncertainty_bars_are_k_standard_deviations(identified):
+    """Each mode at (fn, 100 zeta) with bars of +-2 std (fn_std_hz, zeta_std) drawn from
+    the result's own columns; reliable filled, others hollow; labels readable."""
+    from matplotlib.container import ErrorbarContainer
+
+    from mvtk.plot import plot_modal_uncertainty
+
+    res = identified
+    fig = plot_modal_uncertainty(res)
+    ax = fig.axes[0]
+    bars = [c for c in ax.containers if isinstance(c, ErrorbarContainer)]
+    assert len(bars) == (1 if res.reliable.all() or not res.reliable.any() else 2)
+    got_x, got_y, got_dy = [], [], []
+    for c in bars:
+        x, y = c.lines[0].get_data()
+        got_x += list(x)
+        got_y += list(y)
+        ycol = c.lines[2][-1]                     # the vertical bar segments
+        got_dy += [seg[1, 1] - seg[0, 1] for seg in ycol.get_segments()]
+    order = np.argsort(got_x)
+    np.testing.assert_allclose(np.sort(got_x), np.sort(res.fn_hz))
+    np.testing.assert_allclose(np.asarray(got_y)[order], 100 * res.zeta[np.argsort(res.fn_hz)])
+    np.testing.assert_allclose(np.asarray(got_dy)[order],
+                               2 * 2 * 100 * res.zeta_std[np.argsort(res.fn_hz)], rtol=1e-9)
+    assert ax.get_ylabel() == "damping ratio zeta [%]"
+    with pytest.raises(Exception, match="k must be a coverage factor"):
+        plot_modal_uncertainty(res, k=0)
