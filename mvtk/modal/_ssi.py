@@ -473,6 +473,21 @@ def identify_output_only(
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
                                      diagram.band_hz, stab.zeta_max, kurtosis=kurt,
                                      max_harmonic_kurtosis=HARMONIC_KURTOSIS)
+    decay = transient_ratio(y)
+    if nm and decay < MIN_STATIONARY_RATIO:
+        # a free decay (or another transient): the output correlations are not those of
+        # a stationary response, so the damping is biased and the block scatter is not
+        # its uncertainty
+        why = (f"the record is a transient (RMS of its last quarter {decay:.1%} of its "
+               f"first, < {MIN_STATIONARY_RATIO:.0%}): SSI-cov assumes a stationary "
+               "response, its damping and standard deviations do not hold; fit the decay "
+               "(mvtk damping, envelope)")
+        reliable = np.zeros(nm, bool)
+        reason = tuple(why if r == "ok" else f"{why}; {r}" for r in reason)
+        fn_std = np.full(nm, np.nan)
+        zeta_std = np.full(nm, np.nan)
+        psi_std = np.full_like(psi_std, np.nan)
+        shp_std = shp_std.copy(data=np.full(shp_std.shape, np.nan))
     return IdentifiedModes(
         method="SSI-cov", fn_hz=fn, zeta=zeta, pole=sel.pole, shapes=shp, real_shapes=rshp,
         participation=None, mpc=mpc_v, mpd=mpd_v, stability_count=sel.count,
@@ -480,6 +495,52 @@ def identify_output_only(
         residue=None, lower_residual=None, upper_residual=None, diagram=diagram,
         kurtosis=kurt, fn_std_hz=fn_std, zeta_std=zeta_std, shape_std=shp_std,
     )
+
+
+MIN_STATIONARY_RATIO = 0.1
+"""An output-only record whose last quarter has less than this fraction of the RMS of
+its first quarter (median over channels; 20 dB down) is a transient, not a stationary
+response: its SSI-cov modes are marked not reliable (:func:`transient_ratio`)."""
+
+
+def transient_ratio(y) -> float:
+    """RMS of the last quarter of a record over the RMS of its first quarter.
+
+    Median over channels of ``rms(y[-n/4:]) / rms(y[:n/4])`` of the mean-removed
+    channels: about 1 for a stationary response (ambient, random), ``exp(-zeta w T
+    3/4)`` for a free decay of length ``T``. NaN when no channel has signal in its first
+    quarter.
+
+    Parameters
+    ----------
+    y : array_like, shape (n_channels, n_samples)
+        The outputs (any unit).
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    A 10 Hz free decay at 1 % over 4 s (``exp(-0.01 x 2 pi 10 x 3) = 0.15``) against
+    white noise:
+
+    >>> t = np.arange(0, 4, 1e-3)
+    >>> decay = np.exp(-0.01 * 2 * np.pi * 10 * t) * np.cos(2 * np.pi * 10 * t)
+    >>> round(transient_ratio(decay[None]), 2)
+    0.15
+    >>> round(transient_ratio(np.random.default_rng(0).standard_normal((2, 4000))), 1)
+    1.0
+    """
+    y = np.atleast_2d(np.asarray(y, dtype=float))
+    n = y.shape[-1] // 4
+    if n < 1:
+        return float("nan")
+    y = y - y.mean(axis=-1, keepdims=True)
+    first = np.sqrt(np.mean(y[:, :n] ** 2, axis=-1))
+    last = np.sqrt(np.mean(y[:, -n:] ** 2, axis=-1))
+    ok = first > 0
+    return float(np.median(last[ok] / first[ok])) if ok.any() else float("nan")
 
 
 def _same_mode(diagram, pole, vector, clus):
