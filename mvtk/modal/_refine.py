@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from ._frf import FRF_TYPES
+from ._lm import levenberg_marquardt
 
 __all__ = ["refine_poles", "PoleRefinement", "pole_std"]
 
@@ -322,8 +322,7 @@ def _refine_group(H, f, lam0, fixed, lines, frf_type, residuals, variance, max_n
     try:
         if max_nfev == 0:
             raise _NotRefined
-        sol = scipy.optimize.least_squares(prob.residual, theta0, jac=prob.jacobian,
-                                           method="lm", x_scale="jac", max_nfev=max_nfev)
+        sol = levenberg_marquardt(prob.residual, prob.jacobian, theta0, max_nfev=max_nfev)
         theta = sol.x
         msg = ""
         if not (np.all(np.isfinite(theta)) and sol.cost <= 0.5 * np.sum(
