@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import ConfigError, MvtkError
 
 __all__ = ["run_view", "json_document", "json_clean", "check_output_file", "refuse_inputs",
-           "study_inputs", "refuse_inputs_in_folder",
+           "study_inputs", "refuse_inputs_in_folder", "refuse_study_as_data",
            "add_cache_argument", "StageError", "SCHEMA_VERSIONS", "parse_option",
            "add_reader_options", "reader_options"]
 
@@ -117,6 +117,31 @@ def study_inputs(study_path) -> list[Path]:
     from ..study import load_study
 
     return list(load_study(study_path).input_files)
+
+
+def refuse_study_as_data(paths, command: str) -> None:
+    """A study TOML given where a measurement file is expected: a one-line error naming
+    the study's measurement files and ``mvtk run``, instead of a reader's "no numeric
+    data" (the study's own stages run those files with the study's settings)."""
+    from ..errors import ConfigError
+
+    for path in paths:
+        p = Path(path)
+        if p.suffix.lower() != ".toml" or not p.is_file():
+            continue
+        from ..study._text import read_toml
+
+        try:
+            cfg = read_toml(p, "study file")
+        except Exception:  # not a readable TOML: the reader's own error says why
+            continue
+        if "study" not in cfg:
+            continue
+        data = [str(f) for f in study_inputs(p) if f.suffix.lower() != ".toml"]
+        raise ConfigError(
+            f"{p} is a study, not a measurement file: `mvtk {command}` reads a "
+            f"measurement file, e.g. one the study uses ({', '.join(data[:4]) or 'none'})"
+            f"; `mvtk run {p} --out DIR` runs every stage of the study")
 
 
 def refuse_inputs_in_folder(folder, inputs, option: str = "--out") -> None:

@@ -81,8 +81,9 @@ def run(args: argparse.Namespace) -> int:
     from ..damping._common import NoEstimateError
     from ..damping._estimate import estimate
     from ..errors import ParameterError
-    from ._common import reader_options
+    from ._common import reader_options, refuse_study_as_data
 
+    refuse_study_as_data([args.file], "damping")
     method = args.method
     notes: list[str] = []
     try:

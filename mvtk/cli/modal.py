@@ -189,8 +189,9 @@ def run(args: argparse.Namespace) -> int:
     from ._common import spare_dask_probe
 
     spare_dask_probe()
-    from ._common import check_output_file, refuse_inputs
+    from ._common import check_output_file, refuse_inputs, refuse_study_as_data
 
+    refuse_study_as_data(args.files, "modal")
     outputs = [("--uff-modes", args.uff_modes), ("--uff-frf", args.uff_frf)]
     for opt, path in outputs:
         if path:

@@ -47,8 +47,15 @@ def run(args: argparse.Namespace) -> int:
             f"`mvtk init DIR --structure {path}`, edit what it marks EDIT, then run "
             "`mvtk modes DIR/structure.toml`")
     # UTF-8, UTF-8 with BOM or UTF-16 with BOM; a clear error naming the byte otherwise
-    model = build_model(resolve_mesh_file(read_toml(args.structure, "structure file"),
-                                          Path(args.structure).resolve().parent))
+    desc = read_toml(args.structure, "structure file")
+    structure_file = desc.get("structure", {}).get("file") if "study" in desc else None
+    if isinstance(structure_file, str):
+        # a study: its nominal structure ([structure] file, relative to the study)
+        path = (path.resolve().parent / structure_file).resolve()
+        desc = read_toml(path, "structure file")
+        if not args.json:
+            print(f"structure of study {args.structure}: {path}")
+    model = build_model(resolve_mesh_file(desc, path.resolve().parent))
     res = modal_analysis(model, args.n_modes)
     if args.json:
         out = {
