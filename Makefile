@@ -1,7 +1,8 @@
 # mvtk: two entry points.  `make report` runs the smart-beam study to an HTML report,
 # `make test` lints and runs the whole test suite.  Both create .venv on first use and
 # install only what they need: the report the base package (plus CHOLMOD, a faster
-# sparse Cholesky), the tests also the test peers and tools.
+# sparse Cholesky, and Debian's OpenBLAS for it when run as root), the tests also the
+# test peers and tools.
 # `make docs` builds the documentation site (docs/_build/html).
 PYTHON ?= python3
 VENV   := .venv
@@ -20,12 +21,16 @@ $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-$(REPORT_STAMP): pyproject.toml | $(VENV)/bin/python
+$(REPORT_STAMP): pyproject.toml scripts/system_packages.sh | $(VENV)/bin/python
+	# Debian's OpenBLAS for CHOLMOD (as root with apt-get; otherwise a hint, never an error)
+	bash scripts/system_packages.sh report
 	# --no-compile: byte code is written for the modules a run imports, not for all (135 MB)
 	$(BIN)/python -m pip install --quiet --no-compile -e '.[cholmod]'
 	touch $(REPORT_STAMP)
 
-$(STAMP): pyproject.toml | $(VENV)/bin/python
+$(STAMP): pyproject.toml scripts/system_packages.sh | $(VENV)/bin/python
+	# OpenBLAS, plus chromium and libblas3/liblapack3 for the browser and OpenSees tests
+	bash scripts/system_packages.sh test
 	$(BIN)/python -m pip install --quiet -e '.[tdms,control,scale,test,cholmod]'
 	# SDynPy is the peer of the correlation tests (MAC, FRAC, MSF); its GUI dependencies
 	# (PyQt5, VTK: hundreds of MB) are not needed for that, so it comes without them

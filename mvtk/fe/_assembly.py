@@ -171,20 +171,27 @@ class SparsityPattern:
         self.indices = template[np.repeat(row_start - indptr[:-1], row_len)
                                 + np.arange(nnz)]
         self.indptr = indptr
-        # CSR position of every entry (a, c) of every node-pair block p = (P, Q): row
-        # DOF a of P, column DOF c of Q; entries on a constrained DOF or between
-        # different kinds are not in the pattern
-        itype = np.int32 if 2 * nnz < 2**31 - 1 else np.int64
-        base = indptr[np.maximum(fi, 0)]                             # (n_nodes, b)
-        pos = np.add(base[P][:, :, None], rank[Q][:, None, :], dtype=itype)
-        pos += offset.T.astype(itype)[:, :, None]
-        valid = (fi[P] >= 0)[:, :, None] & (fi[Q] >= 0)[:, None, :]
-        valid &= (kinds[:, None] == kinds[None, :])[None]
+        # CSR position of every entry (a, c) of every node-pair block p = (P, Q), row
+        # DOF a of P, column DOF c of Q, made per DOF kind (entries between kinds and on
+        # a constrained DOF are not in the pattern): the start of the pair's columns in
+        # the row of a, plus the rank of c among the pair's columns of its kind
+        itype = np.int32 if max(2 * nnz, n_pairs * b * b) < 2**31 - 1 else np.int64
+        rowbase = (indptr[np.maximum(fi, 0)][P] + offset.T).astype(itype)   # (n_pairs, b)
+        colrank = rank[Q].astype(itype)
+        okp, okq = fi[P] >= 0, fi[Q] >= 0
+        flat0 = (np.arange(n_pairs, dtype=itype) * itype(b * b))[:, None, None]
         # the inverse: for every CSR entry, its (pair, a, c) in the pair blocks (each
         # entry is in exactly one pair block), so that the data are one np.take
-        valid = np.flatnonzero(valid.ravel())
         self._gather = np.empty(nnz, dtype=itype)
-        self._gather[pos.ravel()[valid]] = valid
+        for k in np.unique(kinds):
+            cols = np.flatnonzero(kinds == k)
+            pos = rowbase[:, cols][:, :, None] + colrank[:, cols][:, None, :]
+            flat = flat0 + (cols[:, None] * b + cols[None, :]).astype(itype)[None]
+            ok = okp[:, cols][:, :, None] & okq[:, cols][:, None, :]
+            if ok.all():
+                self._gather[pos.ravel()] = flat.ravel()
+            else:
+                self._gather[pos[ok]] = flat[ok]
         self._pair_of = pinv.ravel().astype(itype, copy=False)      # (n_el * s * s,)
         self._n_pairs = n_pairs
         self._block = (s, b)

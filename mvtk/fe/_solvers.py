@@ -79,13 +79,24 @@ BLOCK_SIZE = 2
 DEFAULT_TOL = 0.0
 #: Solve with CHOLMOD's simplicial form of the factor: after the supernodal
 #: factorisation, the factor is converted in place to simplicial LL' (the same entries,
-#: copied; ~20 ms on the 49 140-DOF plate). The CHOLMOD wheel links the reference BLAS,
-#: whose supernodal triangular sweeps are slow: on that plate a simplicial solve took
-#: 21 ms of CPU against 27-30 ms for one right-hand side, and 9-13 ms against 20-25 ms
-#: per right-hand side for 2-50 of them (CHOLMOD's simplicial kernels take up to 4 at a
-#: time). Residuals equal to round-off (1e-14 relative difference of the solutions).
-#: While converting, CHOLMOD holds both forms of the factor (a transient peak).
-CHOLMOD_SIMPLICIAL = True
+#: copied; ~20 ms on the 49 140-DOF plate, and a transient second copy of the factor).
+#: None (default): only when CHOLMOD runs on the reference BLAS its wheel bundles
+#: (:func:`mvtk._blas.load_system_blas` found no OpenBLAS), whose supernodal triangular
+#: sweeps are slow. Measured on the 49 140-DOF plate, one BLAS thread, per solve of
+#: 1 / 2 / 4 right-hand sides: reference BLAS supernodal 27-30 / 40-50 / - ms against
+#: simplicial 21 / 26 / 38 ms; OpenBLAS supernodal 14 / 22 / 26 ms (and a factorisation
+#: of 0.26 s against 0.41 s with the conversion). On the 1 M-DOF plate both forms solve
+#: at the same speed with OpenBLAS (0.49 s for one right-hand side, 0.6-0.7 s for 2).
+#: Residuals equal to round-off either way.
+CHOLMOD_SIMPLICIAL: bool | None = None
+
+
+def _simplicial_solves() -> bool:
+    if CHOLMOD_SIMPLICIAL is not None:
+        return CHOLMOD_SIMPLICIAL
+    from .._blas import load_system_blas
+
+    return load_system_blas()[0] is None
 
 _ORDER_CACHE: OrderedDict[bytes, np.ndarray] = OrderedDict()
 _ORDER_CACHE_SIZE = 8
@@ -94,6 +105,9 @@ _ORDER_CACHE_SIZE = 8
 
 
 def _cholmod_module():
+    from .._blas import load_system_blas
+
+    load_system_blas()
     try:
         from sksparse_minimal import SparseCholesky
     except ImportError:
@@ -142,7 +156,10 @@ def sparse_backend(detail: bool = False) -> str:
             return "unknown version"
 
     if name == "cholmod":
-        return f"cholmod (SuiteSparse CHOLMOD via sksparse-minimal {version('sksparse-minimal')})"
+        from .._blas import load_system_blas
+
+        return (f"cholmod (SuiteSparse CHOLMOD via sksparse-minimal "
+                f"{version('sksparse-minimal')}; BLAS: {load_system_blas()[1]})")
     try:
         import pymetis  # noqa: F401  (availability check)
     except ImportError:
@@ -585,7 +602,7 @@ def factorize(A, backend: str = "auto", ordering: str = "auto") -> Factorization
                         f"matrix of size {A.shape[0]} is not positive definite "
                         "(CHOLMOD): " + singular) from err
             else:
-                if CHOLMOD_SIMPLICIAL:
+                if _simplicial_solves():
                     _to_simplicial(f)
                 # CHOLMOD may factorise a singular matrix with a round-off pivot; a solve
                 # round trip tells (then SuperLU decides, with its exact-zero pivots)

@@ -55,7 +55,8 @@ class Provenance:
     created_utc : str
         ISO 8601 UTC time stamp of the run.
     versions : dict of str to str
-        mvtk, python, numpy, scipy, pandas, xarray, matplotlib versions and the platform.
+        mvtk, python, numpy, scipy, pandas, xarray, matplotlib versions, the platform
+        and the sparse solver of the FE stages (:func:`mvtk.fe.sparse_backend`).
     inputs : DataFrame
         One row per input file: ``path, bytes, sha256``.
     parameters : dict
@@ -178,6 +179,10 @@ def collect_provenance(
     }
     for mod in ("numpy", "scipy", "pandas", "xarray", "matplotlib"):
         versions[mod] = _version(mod)
+    from ..fe import sparse_backend
+
+    # the factorisation (and, for CHOLMOD, its BLAS) behind every FE figure and timing
+    versions["sparse solver (FE)"] = sparse_backend(detail=True)
     stamp = (now or _dt.datetime.now(_dt.UTC)).astimezone(_dt.UTC)
     return Provenance(
         created_utc=stamp.isoformat(timespec="seconds"),
