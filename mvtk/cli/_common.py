@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import ConfigError, MvtkError
 
 __all__ = ["run_view", "json_document", "json_clean", "check_output_file", "refuse_inputs",
-           "study_inputs", "refuse_inputs_in_folder", "refuse_study_as_data",
+           "study_inputs", "refuse_study_as_data",
            "add_cache_argument", "StageError", "SCHEMA_VERSIONS", "parse_option",
            "add_reader_options", "reader_options"]
 
@@ -142,34 +142,6 @@ def refuse_study_as_data(paths, command: str) -> None:
             f"{p} is a study, not a measurement file: `mvtk {command}` reads a "
             f"measurement file, e.g. one the study uses ({', '.join(data[:4]) or 'none'})"
             f"; `mvtk run {p} --out DIR` runs every stage of the study")
-
-
-def refuse_inputs_in_folder(folder, inputs, option: str = "--out") -> None:
-    """Refuse an output folder whose written files would replace an input.
-
-    The files a run writes into ``folder`` are ``index.html``, ``report.pdf``,
-    ``manifest.json`` and everything below ``tables/`` and ``cache/``.
-
-    Raises
-    ------
-    OutputError
-        An input file is, or lies where, one of those outputs goes.
-    """
-    from .._atomic import same_file
-    from ..errors import OutputError
-
-    out = Path(folder)
-    written = [out / n for n in ("index.html", "report.pdf", "manifest.json")]
-    subdirs = [(out / d).resolve() for d in ("tables", "cache")]
-    for src in inputs:
-        src = Path(src)
-        real = src.resolve()
-        if any(same_file(src, w) for w in written) or any(
-                real.is_relative_to(d) for d in subdirs):
-            raise OutputError(f"{option} {str(folder)!r} would overwrite the input file "
-                              f"{str(src)!r} (a run writes index.html, report.pdf, "
-                              "manifest.json, tables/ and cache/ there): give another "
-                              "output folder")
 
 
 def add_cache_argument(p: argparse.ArgumentParser) -> None:

@@ -15,7 +15,8 @@ __all__ = ["add_parser"]
 
 def _run(args: argparse.Namespace) -> int:
     from ..study import run, study_checks
-    from ._common import refuse_inputs_in_folder, study_inputs
+    from ..study._run import refuse_inputs_in_folder
+    from ._common import study_inputs
 
     refuse_inputs_in_folder(args.out, study_inputs(args.study), "--out")
     t0 = time.perf_counter()

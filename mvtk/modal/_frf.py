@@ -319,7 +319,10 @@ def reciprocal(frf) -> xr.DataArray:
     """Swap responses and references (Maxwell-Betti reciprocity ``H_ij = H_ji``).
 
     A roving-hammer test (one sensor, hammer at every test point) gives a 1 x N matrix;
-    its reciprocal is the N x 1 matrix whose response side carries the mode shapes.
+    its reciprocal is the N x 1 matrix whose response side carries the mode shapes. The
+    force level of each hammer point (``reference_level_db``) goes with the point, to
+    dims ``("response", "frequency")``, so that the excited band and the
+    weak-excitation check of :func:`identify` still see it.
 
     Examples
     --------
@@ -333,10 +336,12 @@ def reciprocal(frf) -> xr.DataArray:
     """
     h = as_frf_matrix(frf)
     vals = np.swapaxes(h.values, 0, 1)
-    # the measurement evidence of each pair follows it (coherence, set verdicts)
+    # the measurement evidence of each pair follows it (coherence, set verdicts), and
+    # the excitation level of each hammer point follows the point to the response side
     pairs = {name: (tuple({"response": "reference", "reference": "response"}.get(d, d)
                           for d in h[name].dims), h[name].values)
-             for name in ("coherence", "pair_quality") if name in h.coords}
+             for name in ("coherence", "pair_quality", "reference_level_db")
+             if name in h.coords}
     return as_frf_matrix(xr.DataArray(
         vals, dims=_DIMS,
         coords={

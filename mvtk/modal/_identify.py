@@ -222,10 +222,11 @@ def excitation_level(h, fn_hz) -> np.ndarray:
     """Level of the excitation at each frequency in dB re its maximum in the band.
 
     From the ``reference_level_db`` coordinate ``("reference", "frequency")`` that
-    :func:`frf_matrix` attaches (reference autospectrum per line): for each reference
-    the level at the line nearest ``fn`` minus its largest value in the band (lines
-    above 0 Hz), the best reference taken. NaN when the FRF matrix carries no
-    excitation level (FRFs read from UFF 58 or other files without the force).
+    :func:`frf_matrix` attaches (reference autospectrum per line; ``("response",
+    "frequency")`` after :func:`reciprocal`, where the hammer points are the responses):
+    for each excitation point the level at the line nearest ``fn`` minus its largest
+    value in the band (lines above 0 Hz), the best point taken. NaN when the FRF matrix
+    carries no excitation level (FRFs read from UFF 58 or other files without the force).
     """
     fn_hz = np.asarray(fn_hz, dtype=float)
     out = np.full(fn_hz.size, np.nan)
@@ -233,7 +234,8 @@ def excitation_level(h, fn_hz) -> np.ndarray:
     if lev is None or fn_hz.size == 0:
         return out
     f = h["frequency"].values
-    L = np.asarray(lev.transpose("reference", "frequency").values, dtype=float)
+    L = np.asarray(lev.transpose(..., "frequency").values, dtype=float)
+    L = L.reshape(-1, L.shape[-1])
     top = np.max(np.where(np.isfinite(L) & (f > 0)[None, :], L, -np.inf), axis=1)
     ok = np.isfinite(top)
     if not ok.any():

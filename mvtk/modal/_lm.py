@@ -76,7 +76,9 @@ def levenberg_marquardt(fun, jac, x0, *, max_nfev: int = 50, ftol: float = 1e-8,
     g = J.T @ r
     d = np.sqrt(np.diag(A))
     d[d == 0] = 1.0
-    mu = 1e-3 * float(np.max(np.diag(A) / d**2)) if x.size else 0.0
+    # Nielsen's start, tau max(diag of the scaled J'J) with tau = 1e-3: the scaled
+    # diagonal is 1 here (D^2 = diag(J'J)), so the damping starts at tau
+    mu = 1e-3
     nu = 2.0
     message = "max_nfev reached"
     while nfev < max_nfev:

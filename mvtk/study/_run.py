@@ -16,7 +16,7 @@ from typing import Any
 
 from .._interrupt import check_interrupt
 from .._process import die_with_parent
-from ..errors import ConfigError, MvtkError
+from ..errors import ConfigError, MvtkError, OutputError
 from ._cache import OutputLock, ReadTracker, StageCache, TrackedStudy, code_hash, stage_key
 from ._config import Study, load_study
 
@@ -92,6 +92,33 @@ def check_output_dir(out: str | Path) -> Path:
         raise ConfigError(f"the output folder {str(out)!r} is not writable: "
                           f"{err.strerror or err}") from None
     return out
+
+
+def refuse_inputs_in_folder(folder, inputs, option: str = "out_dir") -> None:
+    """Refuse an output folder whose written files would replace an input.
+
+    The files a run writes into ``folder`` are ``index.html``, ``report.pdf``,
+    ``manifest.json`` and everything below ``tables/`` and ``cache/``.
+
+    Raises
+    ------
+    OutputError
+        An input file is, or lies where, one of those outputs goes.
+    """
+    from .._atomic import same_file
+
+    out = Path(folder)
+    written = [out / n for n in ("index.html", "report.pdf", "manifest.json")]
+    subdirs = [(out / d).resolve() for d in ("tables", "cache")]
+    for src in inputs:
+        src = Path(src)
+        real = src.resolve()
+        if any(same_file(src, w) for w in written) or any(
+                real.is_relative_to(d) for d in subdirs):
+            raise OutputError(f"{option} {str(folder)!r} would overwrite the input file "
+                              f"{str(src)!r} (a run writes index.html, report.pdf, "
+                              "manifest.json, tables/ and cache/ there): give another "
+                              "output folder")
 
 
 @dataclass(frozen=True)
@@ -239,6 +266,8 @@ def run(
     ------
     ConfigError
         Invalid study file or output folder (raised before any stage runs).
+    OutputError
+        A file the run would write into ``out_dir`` is one of the study's inputs.
     OutputBusyError
         ``lock_timeout_s`` elapsed while another run held the folder.
     """
@@ -254,6 +283,7 @@ def run(
             f"(line {PLACEHOLDER_MARK!r}); edit it to your structure (geometry, materials, "
             "layers, mesh, supports) and delete that line, or give your own with "
             "`mvtk init --structure FILE`")
+    refuse_inputs_in_folder(out_dir, study.input_files)
     out = check_output_dir(out_dir)
     with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait) as lock:
         return _run_locked(study, out, use_cache=use_cache, progress=progress,

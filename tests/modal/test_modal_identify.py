@@ -246,3 +246,31 @@ def test_damping_the_data_do_not_determine_is_not_reliable():
     assert ok.tolist() == [True, False, True]
     assert why[1] == ("damping not determined by the data: zeta_std is 51% of zeta "
                       "(> 50%)")
+
+
+def test_roving_hammer_keeps_its_force_level_through_reciprocity(msys):
+    # a roving-hammer matrix (one sensor, the hammer at every point: 1 x 6) turned into
+    # its 6 x 1 reciprocal: each point's force level goes with the point to the response
+    # side, so the weak-excitation check still runs (it did not: the level was dropped)
+    M, C, K = msys.chain(6)
+    w2, phi = np.linalg.eigh(K)
+    fn = np.sqrt(w2) / (2 * np.pi)
+    f = np.linspace(1, 1.15 * fn[-1], 2000)
+    col = msys.modal_frf(fn, np.full(6, 0.01), phi.T, f, [0])          # 6 x 1
+    row = modal.reciprocal(col)                                          # 1 x 6
+    # per hammer point: the level falls 60 dB up to the last mode, 6 dB lower per point
+    level = (3.0 - 60.0 * f / fn[-1])[None, :] - 6.0 * np.arange(6)[:, None]
+    row = row.assign_coords(reference_level_db=(("reference", "frequency"), level))
+    row.attrs["excitation"] = "impact"
+    back = modal.reciprocal(row)
+    assert back.coords["reference_level_db"].dims == ("response", "frequency")
+    np.testing.assert_array_equal(back.coords["reference_level_db"].values, level)
+    res = modal.identify(back, 0.5 * fn[0], 1.1 * fn[-1])
+    assert res.n_modes == 6
+    # the best point (the first) sets the level, re its maximum in the band
+    band_top = level[0, f >= 0.5 * fn[0]].max()
+    expect = np.interp(res.fn_hz, f, level[0]) - band_top
+    np.testing.assert_allclose(res.excitation_db, expect, atol=0.1)
+    weak = res.excitation_db < -35.0
+    assert weak.any() and not weak.all(), res.excitation_db
+    assert np.array_equal(~res.reliable, weak), res.to_dataframe()
