@@ -28,3 +28,31 @@ def test_damping_and_modal_refuse_a_study_in_one_line():
         err = r.stderr.strip().splitlines()
         assert len(err) == 1 and "is a study, not a measurement file" in err[0]
         assert "SYNTHETIC_smart_beam_impact.csv" in err[0] and "mvtk run" in err[0]
+
+
+def test_correlate_a_study_prints_its_correlation_stage():
+    import json
+
+    r = _mvtk("correlate", str(STUDY), "--json")
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["n_sensors"] == 13 and doc["mapping"] == "shape"
+    pairs = doc["pairs"]
+    assert len(pairs["test_mode"]) == 6 and all(pairs["paired"])
+    # the report's model-form check: every identified mode pairs with MAC > 0.95
+    assert min(pairs["mac"]) > 0.95
+    assert max(abs(x) for x in pairs["df_pct"]) < 3.0
+    text = _mvtk("correlate", str(STUDY))
+    assert text.returncode == 0 and "13 sensor DOFs mapped (shape) onto the updated FE" \
+        in text.stdout
+
+
+def test_correlate_without_a_structure_says_what_is_missing():
+    structure = STUDY.parents[1] / "structures" / "smart_beam.toml"
+    for arg, expect in ((structure, "no [modal] section"),
+                        (STUDY.parent / "SYNTHETIC_smart_beam_impact.csv",
+                         "needs a STRUCTURE TOML")):
+        r = _mvtk("correlate", str(arg))
+        assert r.returncode == 2, r.stderr
+        err = r.stderr.strip().splitlines()
+        assert len(err) == 1 and expect in err[0], err

@@ -1,10 +1,12 @@
-"""``mvtk correlate GEOMETRY STRUCTURE.toml [--shapes FILE] [--json]``.
+"""``mvtk correlate GEOMETRY STRUCTURE.toml [--shapes FILE] [--json]`` or
+``mvtk correlate STUDY.toml [--json] [--cache DIR]``.
 
 Maps the sensors of a test geometry onto the FE model of a structure description and
 prints the mapping, the MAC and pairing table and the COMAC per sensor (with test shapes
 from a UFF 55 file or a netCDF ``("mode", "dof")`` DataArray), or the FE AutoMAC at the
-sensors (pretest check) without them. The study-level ``mvtk correlate STUDY.toml`` is
-wired by the study package on top of :func:`mvtk.correlation.correlate`.
+sensors (pretest check) without them. Given a study TOML alone, it prints the study's
+``correlation`` stage (the identified multi-point test against the updated FE model, as
+in the report), run through the cached study pipeline like ``mvtk update``.
 """
 
 from __future__ import annotations
@@ -26,8 +28,12 @@ def add_parser(subparsers) -> None:
         description="Map the sensors of a test geometry (UFF, TOML or CSV) onto the FE "
         "model of a structure TOML and correlate test shapes with the FE modes.",
     )
-    p.add_argument("geometry", help="test geometry (.uff/.unv, .toml or .csv)")
-    p.add_argument("structure", help="structure description (TOML), see mvtk.fe.build_model")
+    from ._common import add_cache_argument
+
+    p.add_argument("geometry", help="test geometry (.uff/.unv, .toml or .csv), or a study "
+                   "TOML alone (its correlation stage)")
+    p.add_argument("structure", nargs="?", default=None,
+                   help="structure description (TOML), see mvtk.fe.build_model")
     p.add_argument("--shapes", metavar="FILE",
                    help="measured shapes: UFF 55 (e.g. from mvtk modal --uff-modes or your "
                    "EMA software; values read along each sensor's axis) or a netCDF "
@@ -38,6 +44,7 @@ def add_parser(subparsers) -> None:
     p.add_argument("--units-scale", type=float, default=1.0,
                    help="factor applied to geometry coordinates (1e-3 for mm)")
     p.add_argument("--json", action="store_true", help="print the result as JSON")
+    add_cache_argument(p)
     p.set_defaults(func=run)
 
 
@@ -73,8 +80,42 @@ def _uff_sensors(path, geo):
                              for n in geo.node])
 
 
+def _study_view(args: argparse.Namespace) -> int:
+    """``mvtk correlate STUDY.toml``: the study's correlation stage."""
+    import pandas as pd
+
+    from ._common import json_clean, run_view
+
+    res = run_view(args.geometry, ["correlation"], args.cache)
+    cor = {k: v for k, v in res.results["correlation"].items() if k != "figures"}
+    if args.json:
+        sys.stdout.write(json.dumps(json_clean({"study": str(args.geometry), **cor}),
+                                    allow_nan=False) + "\n")
+        return 0
+    pairs = pd.DataFrame(cor["pairs"]).drop(columns=["index"], errors="ignore")
+    dofs = pd.DataFrame(cor["dofs"]).drop(columns=["index"], errors="ignore")
+    out = [f"{cor['n_sensors']} sensor DOFs mapped ({cor['mapping']}) onto the "
+           f"{'updated ' if 'updating' in res.results else ''}FE model", "",
+           pairs.to_string(index=False), "", dofs.to_string(index=False)]
+    sys.stdout.write("\n".join(out) + "\n")
+    return 0
+
+
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk correlate``; errors propagate as MvtkError."""
+    if args.structure is None:
+        from ..errors import ConfigError
+        from ..study._text import read_toml
+
+        if not str(args.geometry).lower().endswith(".toml"):
+            raise ConfigError(f"{args.geometry}: a test geometry needs a STRUCTURE TOML "
+                              "after it (mvtk correlate GEOMETRY STRUCTURE.toml), or give "
+                              "a study TOML alone")
+        if "modal" not in read_toml(args.geometry, "study file"):
+            raise ConfigError(f"{args.geometry}: no [modal] section (a study's multi-point "
+                              "test), so nothing to correlate; for a test geometry and a "
+                              "structure: mvtk correlate GEOMETRY STRUCTURE.toml")
+        return _study_view(args)
     from ..correlation._correlate import correlate
     from ..correlation._geometry import read_test_geometry
     from ..correlation._shapes import read_test_shapes
