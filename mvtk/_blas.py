@@ -114,7 +114,7 @@ def load_system_blas() -> tuple[str | None, str]:
         return _SYSTEM_BLAS
     _CONTROLLER = None   # the next blas_limits() scans the libraries again, this one too
     name = os.path.basename(path)
-    path = _mapped_path("/lib" + name.split(".so")[0].removeprefix("lib")) or path
+    path = _mapped_path("/" + name.split(".so")[0]) or path
     try:
         lib.openblas_get_config.restype = ctypes.c_char_p
         config = lib.openblas_get_config().decode(errors="replace").split()

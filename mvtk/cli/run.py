@@ -15,10 +15,7 @@ __all__ = ["add_parser"]
 
 def _run(args: argparse.Namespace) -> int:
     from ..study import run, study_checks
-    from ..study._run import refuse_inputs_in_folder
-    from ._common import study_inputs
 
-    refuse_inputs_in_folder(args.out, study_inputs(args.study), "--out")
     t0 = time.perf_counter()
     res = run(args.study, args.out, use_cache=not args.no_cache,
               progress=None if not args.quiet else False, on_wait=waiting)

@@ -94,7 +94,7 @@ def check_output_dir(out: str | Path) -> Path:
     return out
 
 
-def refuse_inputs_in_folder(folder, inputs, option: str = "out_dir") -> None:
+def _refuse_inputs_in_folder(folder, inputs) -> None:
     """Refuse an output folder whose written files would replace an input.
 
     The files a run writes into ``folder`` are ``index.html``, ``report.pdf``,
@@ -115,7 +115,7 @@ def refuse_inputs_in_folder(folder, inputs, option: str = "out_dir") -> None:
         real = src.resolve()
         if any(same_file(src, w) for w in written) or any(
                 real.is_relative_to(d) for d in subdirs):
-            raise OutputError(f"{option} {str(folder)!r} would overwrite the input file "
+            raise OutputError(f"the output folder {str(folder)!r} would overwrite the input file "
                               f"{str(src)!r} (a run writes index.html, report.pdf, "
                               "manifest.json, tables/ and cache/ there): give another "
                               "output folder")
@@ -283,7 +283,7 @@ def run(
             f"(line {PLACEHOLDER_MARK!r}); edit it to your structure (geometry, materials, "
             "layers, mesh, supports) and delete that line, or give your own with "
             "`mvtk init --structure FILE`")
-    refuse_inputs_in_folder(out_dir, study.input_files)
+    _refuse_inputs_in_folder(out_dir, study.input_files)
     out = check_output_dir(out_dir)
     with OutputLock(out, timeout_s=lock_timeout_s, on_wait=on_wait) as lock:
         return _run_locked(study, out, use_cache=use_cache, progress=progress,
