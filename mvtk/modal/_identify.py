@@ -549,14 +549,21 @@ def window_tau(h) -> float | None:
 def record_lines(h) -> tuple[float | None, float]:
     """Record length (s) behind the FRFs and how many lines per record line they hold.
 
-    From ``attrs["nperseg"]`` and ``attrs["nfft"]`` (samples; :func:`mvtk.signal.frf`
+    From ``attrs["resolution_hz"]`` (``1 / record``) and the line spacing of the FRFs
+    as they are (lines kept one per resolution after zero padding count as independent),
+    else from ``attrs["nperseg"]`` and ``attrs["nfft"]`` (samples; :func:`mvtk.signal.frf`
     and :func:`frf_matrix` state them) with the line spacing: ``(nperseg / fs,
     nfft / nperseg)``; ``(None, 1.0)`` when the FRFs do not say. A factor above 1 means
     zero-padded, interpolated lines: neighbouring lines are not independent.
     """
     n, nfft = h.attrs.get("nperseg"), h.attrs.get("nfft")
     f = h["frequency"].values
-    if n is None or nfft is None or f.size < 2:
+    if f.size < 2:
+        return None, 1.0
+    res, df = h.attrs.get("resolution_hz"), float(np.median(np.diff(f)))
+    if isinstance(res, (int, float)) and res > 0 and df > 0:
+        return 1.0 / float(res), max(float(res) / df, 1.0)
+    if n is None or nfft is None:
         return None, 1.0
     n, nfft = int(n), int(nfft)
     if n <= 0 or nfft < n:
@@ -627,7 +634,7 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     if tau is not None and nm:
         fn, zeta = exponential_window_correction(fn_fit, zeta_fit, tau)
         zeta_window = zeta_fit - zeta
-    if record_s is not None and pad > 1.0 and nm:
+    if record_s is not None and pad >= 1.5 and nm:
         # what is left of each (windowed or not) mode at the end of its record: the
         # policy pads only when the whole response has decayed, which a weak slow mode
         # of an accelerance need not have
