@@ -19,7 +19,7 @@ from ._frf import (
     merge_frf,
     reciprocal,
 )
-from ._identify import default_band, identify
+from ._identify import default_band, identify, own_lines
 from ._lsfd import LsfdFit, lsfd, synthesise
 from ._plscf import plscf
 from ._quality import cmif, mac, mpc, mpd
@@ -51,6 +51,7 @@ __all__ = [
     "frf_matrix",
     "frf_of_sets",
     "identify",
+    "own_lines",
     "default_band",
     "identify_output_only",
     "lsfd",

@@ -9,7 +9,7 @@ import scipy.fft
 import xarray as xr
 
 from ..errors import AccuracyWarning, DoubleHitError, FormatError, MvtkError, ParameterError
-from ._impact import DOUBLE_HIT_FRACTION, clipped_channels, second_pulse
+from ._impact import DOUBLE_HIT_FRACTION, PAD_FACTOR, clipped_channels, second_pulse
 from ._input import as_time_history, channel_coord, sampling_rate, select_channels
 from ._spectral import (
     _pair_coords,
@@ -479,9 +479,11 @@ def frf(
     nfft : int, "auto" or None
         Impact only: FFT length (zero padding of each record). ``"auto"``: when
         ``nperseg`` was chosen automatically and the (windowed) response decays to 1 %
-        within the record, the record is zero-padded to the next power of two >= 8 x its
+        within the record, the record is zero-padded to :data:`PAD_FACTOR` (8) x its
         length; the lines then interpolate the spectrum of the complete transient (the
-        frequency resolution stays ``1 / record``, stated as ``attrs["resolution_hz"]``).
+        frequency resolution stays ``1 / record``, stated as ``attrs["resolution_hz"]``),
+        and every 8th line is one of the record's own (:func:`mvtk.modal.identify` uses
+        those for a mode that has not decayed by the record's end).
     double_hit : {"auto", "cut", "refuse"}
         Impact only: what to do with a record that holds a second force pulse above
         ``double_hit_fraction`` x its hit's peak (a rebound of the hammer, or the next
@@ -685,7 +687,7 @@ def frf(
         if nfft == "auto":
             nfft_used = nperseg
             if auto_seg and tail <= 0.011:
-                nfft_used = int(2 ** np.ceil(np.log2(8 * nperseg)))
+                nfft_used = PAD_FACTOR * nperseg
         elif nfft is None:
             nfft_used = nperseg
         else:

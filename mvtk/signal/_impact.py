@@ -12,11 +12,15 @@ from ..errors import FormatError
 
 __all__ = ["DOUBLE_HIT_FRACTION", "CLIP_MIN_SAMPLES", "COHERENCE_MIN", "clipped_channels",
            "second_pulse", "SetQuality", "set_quality", "ImpactPolicy", "impact_policy",
-           "quality_row", "peak_force", "set_excitation"]
+           "quality_row", "peak_force", "set_excitation", "PAD_FACTOR"]
 
 #: A second force pulse whose peak exceeds this fraction of the hit's peak, inside the
 #: hit's record, makes the record a double hit.
 DOUBLE_HIT_FRACTION = 0.05
+#: Zero padding of a complete impact transient: the FFT length is this many times the
+#: record, a whole number, so that every ``PAD_FACTOR``-th line is one of the record's
+#: own lines ``k / T`` (where a mode that has not decayed is still exactly a pole).
+PAD_FACTOR = 8
 #: Consecutive samples at a channel's extreme value that make a flat (clipped) top.
 CLIP_MIN_SAMPLES = 3
 # samples within this fraction of the extreme count as "at" it (values written as
@@ -315,17 +319,19 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
       the slowest decay (largest tail) to 1 %, applied to every set. A set whose tail is
       within 3 x its pretrigger RMS has decayed into its noise floor and does not
       count (a window cannot make noise decay);
-    - FFT length: the record itself when a window is applied; the next power of two
-      >= 8 x the record (the lines interpolate the spectrum) only when every response
-      has decayed to 1 % unwindowed. An exponential window brings the *whole* response
-      to 1 % of its peak, but a slow mode of small amplitude (the first bending mode of
-      an accelerance) still ends the record at several per cent of its own amplitude:
-      on the record's own lines ``k / T`` the truncated exponential is exactly a pole
-      (``exp(-i w T) = 1``, only its residue is scaled), on interpolated lines it adds a
-      ripple ``exp(-i w T) / (i w - lambda)`` of period ``1 / T``, about one windowed
-      bandwidth, that no modal model holds: the damping of such a mode comes out
-      biased (+17 % pLSCF, +34 % refined on a 0.3 s roving-hammer test) and removing
-      the window's damping multiplies that bias.
+    - FFT length: the record itself when a window is applied; :data:`PAD_FACTOR` (8) x
+      the record (the lines interpolate the spectrum, every 8th is one of the record's
+      own) only when every response has decayed to 1 % unwindowed. An exponential
+      window brings the *whole* response to 1 % of its peak, but a slow mode of small
+      amplitude (the first bending mode of an accelerance) still ends the record at
+      several per cent of its own amplitude: on the record's own lines ``k / T`` the
+      truncated exponential is exactly a pole (``exp(-i w T) = 1``, only its residue
+      is scaled), on interpolated lines it adds a ripple ``exp(-i w T) / (i w -
+      lambda)`` of period ``1 / T``, about one windowed bandwidth, that no modal model
+      holds: the damping of such a mode comes out biased (+17 % pLSCF, +34 % refined
+      on a 0.3 s roving-hammer test) and removing the window's damping multiplies that
+      bias. The same holds unwindowed; :func:`mvtk.modal.identify` then repeats the
+      fit on the own lines of the padded FRFs.
 
     Parameters
     ----------
@@ -430,7 +436,7 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
                else None)
     else:
         tau = None if exponential_tau_s is None else float(exponential_tau_s)
-    nfft = (int(2 ** np.ceil(np.log2(8 * nperseg))) if nfft in ("auto", None) and
+    nfft = (PAD_FACTOR * nperseg if nfft in ("auto", None) and
             tau is None and tails[slow] <= 0.011 else
             nperseg if nfft in ("auto", None) else int(nfft))
     if given:

@@ -8,6 +8,7 @@ correction of Fladung & Rost (MSSP 11(1) 1997), mvtk.signal.exponential_window_c
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import warnings
@@ -192,12 +193,13 @@ def test_zero_padded_windowed_lines_are_not_trusted(campaign11):
     assert not m1["reliable"] and "zero-padded lines" in m1["reason"]   # ... and stated
 
 
-def test_unwindowed_padded_record_flags_a_slow_weak_mode(tmp_path):
+def test_unwindowed_padded_record_is_identified_on_its_own_lines(tmp_path):
     # a 20-point roving test of the aluminium plate (data/structures/plate.toml with E
     # +5 %), 2 s records, zeta 0.8 %: the whole response decays to 1 %, so the impact
-    # policy uses no window and interpolates (zero-pads); mode 1 (29 Hz, weak in the
-    # accelerance) still ends the record at 4.4 % of its amplitude, and its damping came
-    # out +8.7 % with a standard deviation 14 x smaller than the error, marked reliable
+    # policy uses no window and interpolates (zero-pads 8 x); mode 1 (29 Hz, weak in the
+    # accelerance) still ends the record at 4.4 % of its amplitude. On the padded lines
+    # its damping came out +8.7 % with a standard deviation 14 x smaller than the error;
+    # on the record's own lines (every 8th) the truncated decay is exactly a pole
     import tomllib
 
     from mvtk import fe
@@ -210,16 +212,31 @@ def test_unwindowed_padded_record_flags_a_slow_weak_mode(tmp_path):
            for y in np.linspace(0.0, 0.3, 5)]
     files = RH.write_fe_test(tmp_path, model, modes, pts, model.nearest_node([0.3, 0, 0]),
                              zeta=0.008, fs=2048.0, record_s=2.0, f_max_hz=700, seed=3)
-    h = modal.reciprocal(modal.frf_matrix([io.read(p) for p in files],
-                                          {"quantity": "force"}))
+    sets = [io.read(p) for p in files]
+    h = modal.reciprocal(modal.frf_matrix(sets, {"quantity": "force"}))
     assert h.attrs.get("exponential_window_tau_s") is None
+    assert h.attrs["nfft"] == 8 * h.attrs["nperseg"]
+    # the own lines are the unpadded FRFs of the same records, value for value
+    own = modal.own_lines(h)
+    plain = modal.reciprocal(modal.frf_matrix(sets, {"quantity": "force"},
+                                              nfft=h.attrs["nperseg"]))
+    np.testing.assert_allclose(own["frequency"], plain["frequency"][: own.sizes["frequency"]],
+                               rtol=1e-12)
+    np.testing.assert_allclose(own.values, plain.values[..., : own.sizes["frequency"]],
+                               rtol=1e-9, atol=1e-12 * np.abs(plain.values).max())
     res = modal.identify(h)
-    fn = modes.fn_hz[:8]
+    assert "identified on the record's own lines (every 8th" in res.band_reason
+    assert "29.08 Hz ends the record at 4.4% of its amplitude" in res.band_reason
     assert res.n_modes == 8
-    np.testing.assert_allclose(res.fn_hz, fn, rtol=1e-4)
-    first = res.to_dataframe().iloc[0]
-    assert not first["reliable"]
-    assert "ends with this mode at 4.4% of its amplitude" in first["reason"]
-    # the other modes decay within the record: reliable, damping within 0.1 %
-    assert res.reliable[1:].all(), res.to_dataframe()
-    np.testing.assert_allclose(res.zeta[1:], 0.008, rtol=1e-3)
+    np.testing.assert_allclose(res.fn_hz, modes.fn_hz[:8], rtol=1e-4)
+    # every mode reliable, damping right within 0.05 %, the error inside 3 std
+    assert res.reliable.all(), res.to_dataframe()
+    np.testing.assert_allclose(res.zeta, 0.008, rtol=5e-4)
+    assert np.all(np.abs(res.zeta - 0.008) < 3 * res.zeta_std)
+    # what the padded lines would leave of each mode at the record's end (the rule)
+    from mvtk.modal._identify import truncation
+
+    padded = truncation(dataclasses.replace(res, frf=h))
+    sigma_T = 0.008 * 2 * np.pi * modes.fn_hz[:8] / h.attrs["resolution_hz"]
+    np.testing.assert_allclose(np.log(padded), -sigma_T, rtol=1e-3)   # 5.6 % for mode 1
+    assert padded[0] > 0.05 and np.all(padded[1:] < 0.01)

@@ -83,8 +83,10 @@ def test_init_hints_at_the_coarse_curved_panel(tmp_path):
     structure = PANEL / "curved_panel.toml"
     model = build_model(load_structure(structure))
     modes = modal_analysis(model, 8)
-    # a driving-point hit 50 mm off the stiffener, where mode 5 is the reliable peak
-    at = int(np.argmin(np.linalg.norm(model.nodes - [0.2, 0.05, np.sqrt(0.25 - 0.05**2)],
+    # a driving-point hit 33 mm off the stiffener (node 287), where mode 5 is a clearly
+    # reliable half-power peak (|H| scatter 2.7 %; at the next node, 65 mm off, the
+    # neighbouring mode puts it at the 5 % limit, on one side or the other with the grid)
+    at = int(np.argmin(np.linalg.norm(model.nodes - [0.2, 0.035, np.sqrt(0.25 - 0.035**2)],
                                       axis=1)))
     hit = RH.write_fe_test(tmp_path, model, modes, [at], at, record_s=2.0,
                            f_max_hz=400.0)[0]
