@@ -786,6 +786,7 @@ def read_columns(
         ``n_fields`` numeric fields per line (the caller's line-by-line path then names
         the line).
     """
+    import threading
     from concurrent.futures import ThreadPoolExecutor
 
     size = os.path.getsize(path)
@@ -803,32 +804,47 @@ def read_columns(
             per_line = max(len(sample) / max(sample.count(b"\n"), 1), 2.0)
             rows_hint = int((size - start) / per_line * 1.05) + 64
         rows_hint = max(int(rows_hint), 1)
+        n_chunks = len(offsets) - 1
+        block = np.empty((len(keep), rows_hint), dtype=np.float64)
+        # each worker copies its own chunk into ``block`` once the rows of every chunk
+        # before it are known (the main thread then only submits: no third thread
+        # competing with the two parsers for the cores); a chunk beyond the estimated
+        # rows is kept and copied after the pool, into a grown array
+        state = threading.Condition()
+        rows = [-1] * n_chunks           # rows of each parsed chunk
+        first = [0] * (n_chunks + 1)     # row offset of each chunk, known for k < known
+        known = [0]
+        failed = [False]
+        overflow: dict[int, list] = {}
 
         def parse(k: int):
             lo, hi = offsets[k], offsets[k + 1]
             buf = os.pread(fd, hi - lo, lo)
-            try:
-                df = pd.read_csv(io.BytesIO(buf), **opts)
-            except pd.errors.EmptyDataError:
-                return [np.empty(0)] * len(keep), np.zeros(len(keep), dtype=np.int64)
-            except (ValueError, TypeError, pd.errors.ParserError):
-                return None
+            got = _parse_chunk(buf, opts, n_fields, keep, extra)
             del buf
-            m = df.shape[1]
-            if m == n_fields + 1 and extra == "empty":
-                if not df.iloc[:, -1].isna().all():
+            with state:
+                if got is None:
+                    failed[0] = True
+                else:
+                    rows[k] = len(got[0][0]) if keep else 0
+                while known[0] < n_chunks and rows[known[0]] >= 0:
+                    first[known[0] + 1] = first[known[0]] + rows[known[0]]
+                    known[0] += 1
+                state.notify_all()
+                while known[0] <= k and not failed[0]:
+                    state.wait()
+                if failed[0]:
                     return None
-            elif m != n_fields and not (m == n_fields + 1 and extra == "ignore"):
-                return None
-            if any(dt.kind not in "fiu" for dt in df.dtypes.iloc[:n_fields]):
-                return None  # text in a numeric column
-            columns = [df.iloc[:, k].to_numpy(dtype=np.float64, copy=False) for k in keep]
-            return columns, np.array([np.isnan(c).sum() for c in columns], dtype=np.int64)
+            columns, nans = got
+            a, b = first[k], first[k + 1]
+            if b > block.shape[1]:
+                overflow[k] = columns
+            else:
+                for j, column in enumerate(columns):
+                    block[j, a:b] = column
+            return nans
 
-        block = np.empty((len(keep), rows_hint), dtype=np.float64)
         nan_counts = np.zeros(len(keep), dtype=np.int64)
-        n_rows = 0
-        n_chunks = len(offsets) - 1
         with ThreadPoolExecutor(max_workers=n_workers) as pool:
             pending = []
             submitted = 0
@@ -836,22 +852,46 @@ def read_columns(
                 pending.append(pool.submit(parse, submitted))
                 submitted += 1
             while pending:
-                got = pending.pop(0).result()
-                if got is None:
+                nans = pending.pop(0).result()
+                if nans is None:
+                    with state:
+                        failed[0] = True
+                        state.notify_all()
                     for f in pending:
                         f.cancel()
                     return None
+                nan_counts += nans
                 if submitted < n_chunks:
                     pending.append(pool.submit(parse, submitted))
                     submitted += 1
-                columns, nans = got
-                m = len(columns[0])
-                if n_rows + m > block.shape[1]:
-                    grown = np.empty((len(keep), int((n_rows + m) * 1.25) + 64))
-                    grown[:, :n_rows] = block[:, :n_rows]
-                    block = grown
-                for j, column in enumerate(columns):
-                    block[j, n_rows : n_rows + m] = column
-                nan_counts += nans
-                n_rows += m
+    n_rows = first[n_chunks]
+    if overflow:
+        grown = np.empty((len(keep), n_rows), dtype=np.float64)
+        grown[:, :block.shape[1]] = block[:, :min(block.shape[1], n_rows)]
+        for k, columns in overflow.items():
+            for j, column in enumerate(columns):
+                grown[j, first[k]:first[k + 1]] = column
+        block = grown
     return block[:, :n_rows], n_rows, nan_counts
+
+
+def _parse_chunk(buf: bytes, opts: dict, n_fields: int, keep: list[int], extra: str):
+    """``(columns, nan_counts)`` of one chunk of numeric text (the fields ``keep`` as
+    float64 arrays); None when it does not parse as ``n_fields`` numeric fields per line
+    (see :func:`read_columns` for ``extra``)."""
+    try:
+        df = pd.read_csv(io.BytesIO(buf), **opts)
+    except pd.errors.EmptyDataError:
+        return [np.empty(0)] * len(keep), np.zeros(len(keep), dtype=np.int64)
+    except (ValueError, TypeError, pd.errors.ParserError):
+        return None
+    m = df.shape[1]
+    if m == n_fields + 1 and extra == "empty":
+        if not df.iloc[:, -1].isna().all():
+            return None
+    elif m != n_fields and not (m == n_fields + 1 and extra == "ignore"):
+        return None
+    if any(dt.kind not in "fiu" for dt in df.dtypes.iloc[:n_fields]):
+        return None  # text in a numeric column
+    columns = [df.iloc[:, k].to_numpy(dtype=np.float64, copy=False) for k in keep]
+    return columns, np.array([np.isnan(c).sum() for c in columns], dtype=np.int64)

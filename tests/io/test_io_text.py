@@ -306,3 +306,18 @@ def test_parallel_parse_known_values(tmp_path, rng):
     lines[len(lines) // 2] = lines[len(lines) // 2].replace(",", ",x", 1)
     path.write_text("\n".join(lines) + "\n")
     assert text.read_columns(path, head.index(b"\n") + 1, 9, [1], {"sep": ","}) is None
+
+
+def test_parallel_parse_with_too_few_rows_estimated(tmp_path, rng, monkeypatch):
+    """The workers copy their chunks in place while the row estimate holds; the chunks
+    beyond it are copied after the pool into a grown array, in file order."""
+    import mvtk.io._text as text
+
+    path, data = _big_csv(tmp_path, rng)
+    monkeypatch.setattr(text, "CHUNK_BYTES", 2**20)
+    start = path.read_bytes()[:4096].index(b"\n") + 1
+    for hint in (1, data.shape[0] // 3, data.shape[0]):
+        block, n_rows, nans = text.read_columns(path, start, 9, [8, 1], {"sep": ","},
+                                                rows_hint=hint)
+        assert n_rows == data.shape[0] and not nans.any()
+        np.testing.assert_array_equal(block, data[:, [7, 0]].T)
