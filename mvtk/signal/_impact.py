@@ -313,7 +313,8 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
       the next hit, or to the end of the data) over the sets, leaving out sets whose
       record is shorter than half the median (a double hit or a late hit: their
       records are then cut or refused by :func:`mvtk.signal.frf`, not the test's);
-    - pretrigger: the smallest automatic pretrigger of the sets (1 % of the record);
+    - pretrigger: the smallest automatic pretrigger of the sets that set the record
+      (1 % of the record); a set with a longer one gives up the difference;
     - exponential window: none when every set's response decays to 1 % of its peak
       within the record (RMS of its last 5 %); otherwise the time constant that brings
       the slowest decay (largest tail) to 1 %, applied to every set. A set whose tail is
@@ -404,10 +405,15 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
                                                     None, double_hit_fraction)
         data.append((r, y, pre, info["available"]))
     avail = np.array([d[3] for d in data], dtype=float)
-    typical = avail[avail >= 0.5 * np.median(avail)]
+    own_pre = np.array([d[2] for d in data], dtype=float)
+    typical = avail >= 0.5 * np.median(avail)
     given = nperseg is not None
-    nperseg = int(nperseg) if given else int(np.min(typical))
-    pre = int(pretrigger) if pretrigger is not None else int(min(d[2] for d in data))
+    # the pretrigger and the record come from the same sets (a double-hit set left out
+    # of the record must not shorten the pretrigger either), and a set whose own
+    # pretrigger is longer loses the difference from its record
+    pre = int(pretrigger) if pretrigger is not None else int(np.min(own_pre[typical]))
+    nperseg = (int(nperseg) if given else
+               int(np.min(avail[typical] - np.clip(own_pre[typical] - pre, 0, None))))
     win = _window("boxcar", nperseg)
     tails, floor = [], []
     for r, y, _, _ in data:
@@ -443,8 +449,8 @@ def impact_policy(sets, reference, response=None, *, trigger_level: float = 0.1,
         what = "given"
     else:
         what = "the shortest whole record between hits" + (
-            f", {int(np.sum(avail < 0.5 * np.median(avail)))} set(s) with a shorter one "
-            "left to their double-hit check" if typical.size < avail.size else "")
+            f", {int(np.sum(~typical))} set(s) with a shorter one "
+            "left to their double-hit check" if not typical.all() else "")
     reason = (f"one policy for the {len(data)} sets: record {nperseg} samples = "
               f"{nperseg / fs0:.4g} s ({what}), pretrigger {pre}"
               + (f", zero-padded to {nfft}" if nfft > nperseg else "") + "; ")

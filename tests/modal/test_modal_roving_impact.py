@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from mvtk import io, modal, signal
+from mvtk.errors import AccuracyWarning
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import roving_hammer as RH  # noqa: E402
@@ -193,13 +194,10 @@ def test_zero_padded_windowed_lines_are_not_trusted(campaign11):
     assert not m1["reliable"] and "zero-padded lines" in m1["reason"]   # ... and stated
 
 
-def test_unwindowed_padded_record_is_identified_on_its_own_lines(tmp_path):
-    # a 20-point roving test of the aluminium plate (data/structures/plate.toml with E
-    # +5 %), 2 s records, zeta 0.8 %: the whole response decays to 1 %, so the impact
-    # policy uses no window and interpolates (zero-pads 8 x); mode 1 (29 Hz, weak in the
-    # accelerance) still ends the record at 4.4 % of its amplitude. On the padded lines
-    # its damping came out +8.7 % with a standard deviation 14 x smaller than the error;
-    # on the record's own lines (every 8th) the truncated decay is exactly a pole
+@pytest.fixture(scope="module")
+def plate20(tmp_path_factory):
+    """A 20-point roving test of the aluminium plate (data/structures/plate.toml with E
+    +5 %), 2 s records, zeta 0.8 %: the FE modes and the hit files."""
     import tomllib
 
     from mvtk import fe
@@ -210,8 +208,19 @@ def test_unwindowed_padded_record_is_identified_on_its_own_lines(tmp_path):
     modes = fe.modal_analysis(model, 8)
     pts = [model.nearest_node([x, y, 0.0]) for x in np.linspace(0.075, 0.3, 4)
            for y in np.linspace(0.0, 0.3, 5)]
-    files = RH.write_fe_test(tmp_path, model, modes, pts, model.nearest_node([0.3, 0, 0]),
-                             zeta=0.008, fs=2048.0, record_s=2.0, f_max_hz=700, seed=3)
+    files = RH.write_fe_test(tmp_path_factory.mktemp("plate20"), model, modes, pts,
+                             model.nearest_node([0.3, 0, 0]), zeta=0.008, fs=2048.0,
+                             record_s=2.0, f_max_hz=700, seed=3)
+    return modes, files
+
+
+def test_unwindowed_padded_record_is_identified_on_its_own_lines(plate20):
+    # the whole response decays to 1 %, so the impact policy uses no window and
+    # interpolates (zero-pads 8 x); mode 1 (29 Hz, weak in the accelerance) still ends
+    # the record at 4.4 % of its amplitude. On the padded lines its damping came out
+    # +8.7 % with a standard deviation 14 x smaller than the error; on the record's own
+    # lines (every 8th) the truncated decay is exactly a pole
+    modes, files = plate20
     sets = [io.read(p) for p in files]
     h = modal.reciprocal(modal.frf_matrix(sets, {"quantity": "force"}))
     assert h.attrs.get("exponential_window_tau_s") is None
@@ -240,3 +249,28 @@ def test_unwindowed_padded_record_is_identified_on_its_own_lines(tmp_path):
     sigma_T = 0.008 * 2 * np.pi * modes.fn_hz[:8] / h.attrs["resolution_hz"]
     np.testing.assert_allclose(np.log(padded), -sigma_T, rtol=1e-3)   # 5.6 % for mode 1
     assert padded[0] > 0.05 and np.all(padded[1:] < 0.01)
+
+
+def test_a_late_double_hit_set_does_not_shorten_the_pretrigger(plate20):
+    """Set 7 hit a second time 0.5 s after the first (40 %): its whole record is 0.5 s,
+    so it is left out of the record length; its pretrigger (1 % of that record) was
+    still taken as the test's, so the 1.97 s record no longer fitted behind any other
+    set's hit and `mvtk modal` failed on set 1. Now: the record and the pretrigger come
+    from the same sets, set 7 alone is refused and named, the eight modes are found."""
+    modes, files = plate20
+    sets = [io.read(p) for p in files]
+    th = sets[6]["time_history"]
+    n0 = int(0.5 * 2048)
+    late = th.values.copy()
+    late[:, n0:] += 0.4 * th.values[:, :-n0]          # the whole test again, 40 %
+    sets[6] = sets[6].copy()
+    sets[6]["time_history"] = th.copy(data=late)
+    pol = signal.impact_policy(sets, {"quantity": "force"})
+    clean = signal.impact_policy(sets[:6] + sets[7:], {"quantity": "force"})
+    assert (pol.nperseg, pol.pretrigger) == (clean.nperseg, clean.pretrigger)
+    with pytest.warns(AccuracyWarning, match="1 of 20 measurement set"):
+        h = modal.reciprocal(modal.frf_matrix(sets, {"quantity": "force"}))
+    assert h.sizes["response"] == 19
+    res = modal.identify(h)
+    np.testing.assert_allclose(res.fn_hz, modes.fn_hz[:8], rtol=1e-4)
+    assert res.reliable.all()
