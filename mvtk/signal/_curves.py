@@ -37,6 +37,9 @@ class AmplitudeCurves:
     labels: tuple[str, ...]
     kinds: tuple[str, ...]
     attrs: dict
+    #: The complex values behind ``amplitude`` when the input was complex (an FRF or a
+    #: complex spectrum), same shape; None for power or real input.
+    complex_values: np.ndarray | None = None
 
 
 def _check_frequency(f: np.ndarray, where: str) -> np.ndarray:
@@ -171,4 +174,5 @@ def amplitude_curves(spectrum, f_hz=None, *, power: bool | None = None,
         else:
             amp = np.abs(amp)
     kinds = tuple(kind if kind != "auto" else (k or "mobility") for k in auto)
-    return AmplitudeCurves(f, amp, tuple(labels), kinds, attrs)
+    return AmplitudeCurves(f, amp, tuple(labels), kinds, attrs,
+                           vals if np.iscomplexobj(vals) else None)
