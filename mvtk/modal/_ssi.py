@@ -387,7 +387,9 @@ def identify_output_only(
     the clustering distance, MAC >= ``1 - dmac``) whose gap there is at least
     ``GAP_MARGIN`` (2) standard deviations; its frequency, damping, shape and standard
     deviations then all come from that order. NaN where no order of the mode has such
-    a gap or the record holds fewer than 10 blocks.
+    a gap or the record holds fewer than 10 blocks; such a mode is marked not reliable,
+    reason "no uncertainty: ..." (the data support no standard deviation, so they do not
+    support the estimate either).
 
     Parameters
     ----------
@@ -473,6 +475,26 @@ def identify_output_only(
     reliable, reason = quality_flags(fn, zeta, mpc_v, sel.count, clus.min_count,
                                      diagram.band_hz, stab.zeta_max, kurtosis=kurt,
                                      max_harmonic_kurtosis=HARMONIC_KURTOSIS)
+    no_std = ~np.isfinite(zeta_std)
+    if nm and no_std.any():
+        # a mode with no standard deviation is not supported by the data: no order where
+        # it is found separates its singular values from the noise (the first-order
+        # propagation, hence the uncertainty, does not hold), or the record is too short
+        # for the block covariance
+        from ._ssi_uncertainty import GAP_MARGIN, MIN_BLOCKS, default_blocks
+
+        nb = (default_blocks(state["y"].shape[1], state["i"]) if n_blocks is None
+              else int(n_blocks))
+        why_std = (f"no uncertainty: the record holds {nb} data blocks (< {MIN_BLOCKS}) "
+                   "for the covariance of its correlations; a longer record gives one"
+                   if nb < MIN_BLOCKS else
+                   "no uncertainty: at no model order where this mode is found are its "
+                   f"singular values {GAP_MARGIN:g} standard deviations clear of the "
+                   "noise's, so the first-order propagation does not hold (a weak or "
+                   "noise-like mode; more data or a narrower band)")
+        reliable = np.asarray(reliable, bool) & ~no_std
+        reason = tuple((why_std if r == "ok" else f"{r}; {why_std}") if n else r
+                       for r, n in zip(reason, no_std))
     decay = transient_ratio(y)
     if nm and decay < MIN_STATIONARY_RATIO:
         # a free decay (or another transient): the output correlations are not those of
