@@ -231,3 +231,31 @@ def test_operational_record_names_its_harmonic(shared_data):
     assert near.sum() == 1
     assert not res.reliable[near][0] and np.asarray(res.reason)[near][0].startswith("harmonic")
     assert res.kurtosis[near][0] == pytest.approx(1.63, abs=0.05)
+
+
+def test_a_mode_without_uncertainty_is_not_reliable(shared_data):
+    """good_tdms_1.tdms: the rows no model order gives a 2-std singular-value gap have
+    no standard deviation; they were reliable (1.48/1.56 Hz, 4-6 % from pyOMA-2, and
+    3.24 Hz beside the 3.223 Hz mode). Every reliable row now has its std."""
+    th = _shared_record(shared_data, "tdms/good_tdms_1.tdms")
+    res = modal.identify_output_only(th)
+    none = ~np.isfinite(res.zeta_std)
+    assert none.any() and (~none).any()
+    assert not res.reliable[none].any()
+    assert all("no uncertainty: at no model order" in r
+               for r, n in zip(res.reason, none) if n)
+    assert np.all(np.isfinite(res.fn_std_hz[res.reliable]))
+    assert res.reliable.sum() >= 3
+
+
+def test_a_record_too_short_for_the_block_covariance_says_so():
+    """20 s at 256 Hz with 64 block rows: fewer than 10 blocks, no standard deviations,
+    so no mode is reliable, and the reason says why."""
+    from mvtk import testing
+
+    x = testing.random_excitation_test([20.0, 55.0], [0.01, 0.02], 256.0, 20.0,
+                                       np.random.default_rng(0))
+    res = modal.identify_output_only(x.sel(channel=["response"]), 5.0, 100.0,
+                                     orders=range(2, 21, 2), n_lags=64)
+    assert res.n_modes >= 1 and not res.reliable.any()
+    assert all("data blocks (< 10)" in r for r in res.reason), res.reason
