@@ -458,9 +458,9 @@ def identify(
                            refine=bool(refine))
     res = dataclasses.replace(res, band_hz=tuple(float(b) for b in diagram.band_hz),
                               band_reason=band_reason)
-    own = own_lines(as_frf_matrix(frf))
     left = truncation(res)
-    if own is None or not np.any(left > MAX_TRUNCATION):
+    own = own_lines(as_frf_matrix(frf)) if np.any(left > MAX_TRUNCATION) else None
+    if own is None:
         return res
     # a mode still above 1 % at the end of the zero-padded record: on the record's own
     # lines its truncated decay is exactly a pole (only the residue is scaled), so the
@@ -539,15 +539,20 @@ def truncation(res) -> np.ndarray:
     """Amplitude of each identified mode left at the end of a zero-padded record,
     ``exp(-sigma T)`` with the fitted (windowed) decay rate ``sigma`` (NaN where the
     FRFs are not padded or do not state their record; see :data:`MAX_TRUNCATION`)."""
-    out = np.full(res.n_modes, np.nan)
     if res.frf is None or not res.n_modes:
-        return out
-    record_s, pad = record_lines(res.frf)
-    if record_s is None or pad < 1.5:
-        return out
+        return np.full(res.n_modes, np.nan)
     sigma = -np.real(res.pole)
     if res.window_tau_s is not None:
         sigma = sigma + 1.0 / res.window_tau_s
+    return _left_at_end(sigma, res.frf)
+
+
+def _left_at_end(sigma, h) -> np.ndarray:
+    """``exp(-sigma T)`` of decay rates ``sigma`` (1/s) at the end ``T`` of the record
+    behind the zero-padded FRFs ``h``; NaN when they are not padded or do not say."""
+    record_s, pad = record_lines(h)
+    if record_s is None or pad < 1.5:
+        return np.full(np.shape(sigma), np.nan)
     return np.exp(-np.clip(sigma, 0, None) * record_s)
 
 
@@ -690,7 +695,7 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         cov, noise = ref.covariance, ref.noise_std
     # zero-padded lines interpolate the record's nperseg / 2 independent ones: the fit
     # counts each piece of information ``pad`` times (variances ``pad`` times too small)
-    record_s, pad = record_lines(h)
+    _, pad = record_lines(h)
     cov = cov * pad
     fn = np.abs(pole) / (2 * np.pi)
     zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
@@ -725,15 +730,13 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     fn_fit, zeta_fit = fn, zeta
     tau = window_tau(h)
     zeta_window = np.full(nm, np.nan)
-    left = np.full(nm, np.nan)
     if tau is not None and nm:
         fn, zeta = exponential_window_correction(fn_fit, zeta_fit, tau)
         zeta_window = zeta_fit - zeta
-    if record_s is not None and pad >= 1.5 and nm:
-        # what is left of each (windowed or not) mode at the end of its record: the
-        # policy pads only when the whole response has decayed, which a weak slow mode
-        # of an accelerance need not have
-        left = np.exp(-np.clip(-pole.real, 0, None) * record_s)
+    # what is left of each (windowed or not) mode at the end of its record: the policy
+    # pads only when the whole response has decayed, which a weak slow mode of an
+    # accelerance need not have
+    left = _left_at_end(-pole.real, h)
     fn_std, zeta_std = pole_std(2 * np.pi * fn * (-zeta + 1j * np.sqrt(
         np.clip(1 - zeta**2, 0, None))), cov) if nm else (np.zeros(0), np.zeros(0))
     labels = dof_labels(h["node"].values, h["direction"].values, h["response"].values)

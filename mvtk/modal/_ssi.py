@@ -436,7 +436,8 @@ def identify_output_only(
                               criteria=stab)
     sel = poles_near(diagram, fn_hz) if fn_hz is not None else select_poles(diagram, clus)
     nm = sel.pole.size
-    sel, fn_std, zeta_std, psi_std = _uncertainty(state, diagram, sel, n_blocks, clus)
+    sel, fn_std, zeta_std, psi_std, nb = _uncertainty(state, diagram, sel, n_blocks,
+                                                      clus)
     fn = np.abs(sel.pole) / (2 * np.pi)
     zeta = -sel.pole.real / np.where(np.abs(sel.pole) > 0, np.abs(sel.pole), 1)
     psi = sel.vector[:, :th.sizes["channel"]]
@@ -481,10 +482,8 @@ def identify_output_only(
         # it is found separates its singular values from the noise (the first-order
         # propagation, hence the uncertainty, does not hold), or the record is too short
         # for the block covariance
-        from ._ssi_uncertainty import GAP_MARGIN, MIN_BLOCKS, default_blocks
+        from ._ssi_uncertainty import GAP_MARGIN, MIN_BLOCKS
 
-        nb = (default_blocks(state["y"].shape[1], state["i"]) if n_blocks is None
-              else int(n_blocks))
         why_std = (f"no uncertainty: the record holds {nb} data blocks (< {MIN_BLOCKS}) "
                    "for the covariance of its correlations; a longer record gives one"
                    if nb < MIN_BLOCKS else
@@ -581,7 +580,8 @@ def _same_mode(diagram, pole, vector, clus):
 
 def _uncertainty(state, diagram, sel, n_blocks, clus):
     """The selected poles at the orders their uncertainty is computed at, and
-    ``(sel, fn_std_hz, zeta_std, shape_std)``.
+    ``(sel, fn_std_hz, zeta_std, shape_std, n_blocks)`` (the data blocks of the
+    covariance).
 
     Each mode's uncertainty comes from the highest model order among its poles
     (:func:`_same_mode`) whose singular-value gap at the
@@ -616,7 +616,7 @@ def _uncertainty(state, diagram, sel, n_blocks, clus):
             f"data blocks of at least {8 * i} samples each ({i} block rows); the record "
             f"has {state['y'].shape[1]} samples")
     if nm == 0 or nb < MIN_BLOCKS:
-        return sel, fstd, zstd, sstd
+        return sel, fstd, zstd, sstd, nb
     U, S, Vt = state["U"], state["S"], state["Vt"]
     with blas_limits():
         P = block_perturbations(state["y"], state["yr"], i, nb, U, Vt,
@@ -639,4 +639,4 @@ def _uncertainty(state, diagram, sel, n_blocks, clus):
             fstd[m], zstd[m], sstd[m] = ssi_pole_uncertainty(U, S, Vt, P, nl, int(o),
                                                              state["fs"], pole[m])
     sel = dataclasses.replace(sel, pole=pole, vector=vector, order=order)
-    return sel, fstd, zstd, sstd
+    return sel, fstd, zstd, sstd, nb

@@ -64,7 +64,7 @@ def _monte_carlo(msys, n, reps, seed):
             warnings.simplefilter("ignore")
             d, st = _ssi_cov(th, None, None, range(2, 11, 2))
             sel = poles_near(d, fn)
-            sel, f_s, z_s, _ = _uncertainty(st, d, sel, None, ClusterCriteria())
+            sel, f_s, z_s, _, _ = _uncertainty(st, d, sel, None, ClusterCriteria())
         lam = sel.pole
         rows.append(np.r_[np.abs(lam) / (2 * np.pi), -lam.real / np.abs(lam), f_s, z_s])
     r = np.array(rows)
