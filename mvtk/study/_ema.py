@@ -109,6 +109,11 @@ def _test_summary(frf, res, note: str, source: str, band) -> dict:
         "band_hz": [float(band[0]), float(band[1])],
         "frf_type": str(frf.attrs.get("frf_type", "")),
         "table": res.to_dataframe().to_dict(orient="list"),
+        "orders": [int(res.diagram.orders.min()), int(res.diagram.orders.max())],
+        # how identify adapted to the data (higher orders, the record's own lines)
+        "analysis": [part for part in str(getattr(res, "band_reason", "")).split("; ")
+                     if part.startswith(("model orders raised",
+                                         "identified on the record's own lines"))],
     }
     if frf.attrs.get("set_quality"):  # measurement sets: what each set was worth
         import json

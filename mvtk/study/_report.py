@@ -1036,6 +1036,12 @@ def _slug(name: str) -> str:
     return re.sub(r"[^A-Za-z0-9_]+", "_", str(name)).strip("_") or "test"
 
 
+def _orders_text(mod: dict) -> str:
+    """``", model orders 2..N"`` of an identified test (empty for older results)."""
+    orders = mod.get("orders")
+    return f", model orders {orders[0]}..{orders[1]}" if orders else ""
+
+
 def _section_multipoint(rep: Report, res: StudyResult) -> None:
     """Multi-point test: identified modes, stabilisation, correlation with the FE model."""
     if "modal" not in res.study.config:
@@ -1046,9 +1052,10 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
     mod = res.results["modal"]
     sec.text(f"{mod['file']}: {mod['n_responses']} responses x {mod['n_references']} "
              f"reference(s), {mod['n_lines']} lines ({mod['frf_type'] or 'FRF'}), identified "
-             f"by pLSCF + LSFD (mvtk.modal) in {mod['band_hz'][0]:g}-{mod['band_hz'][1]:g} "
-             "Hz. A mode marked not reliable says why in its row."
-             + (f" {mod['note'][0].upper()}{mod['note'][1:]}." if mod.get("note") else ""))
+             f"by pLSCF + LSFD (mvtk.modal{_orders_text(mod)}) in {mod['band_hz'][0]:g}-"
+             f"{mod['band_hz'][1]:g} Hz. A mode marked not reliable says why in its row."
+             + (f" {mod['note'][0].upper()}{mod['note'][1:]}." if mod.get("note") else "")
+             + "".join(f" {a[0].upper()}{a[1:]}." for a in mod.get("analysis") or ()))
     sec.table(pd.DataFrame(mod["table"]), "modal_modes",
               "Identified modes with their quality (MPC, MPD, stable orders)",
               passed_column=None)
@@ -1064,10 +1071,12 @@ def _section_multipoint(rep: Report, res: StudyResult) -> None:
         n_common = (t["comparison"]["n_common_dofs"] or [0])[0]
         sec.text(f"Multi-point test {name}, {t['file']}: {t['n_responses']} responses x "
                  f"{t['n_references']} reference(s), {t['n_lines']} lines, identified on "
-                 f"its own in {t['band_hz'][0]:g}-{t['band_hz'][1]:g} Hz; each of its modes "
+                 f"its own{_orders_text(t)} in {t['band_hz'][0]:g}-{t['band_hz'][1]:g} Hz; "
+                 "each of its modes "
                  "beside the mode of the test above nearest in frequency (within "
                  f"modal.pair_within; 0: none), MAC on the {n_common} DOFs both tests measured."
-                 + (f" {t['note'][0].upper()}{t['note'][1:]}." if t.get("note") else ""))
+                 + (f" {t['note'][0].upper()}{t['note'][1:]}." if t.get("note") else "")
+                 + "".join(f" {a[0].upper()}{a[1:]}." for a in t.get("analysis") or ()))
         sec.table(pd.DataFrame(t["table"]), f"modal_modes_{_slug(name)}",
                   f"Identified modes of multi-point test {name}", passed_column=None)
         sec.table(pd.DataFrame(t["comparison"]), f"modal_compare_{_slug(name)}",
