@@ -12,6 +12,8 @@ from ._commands import COMMANDS
 __all__ = ["add_parser"]
 
 #: Mesh and FE-deck files that a user may pass by mistake instead of a structure TOML.
+#: Nastran bulk-data decks: a whole model, taken as it is.
+_NASTRAN_SUFFIXES = (".bdf", ".dat", ".nas")
 _MESH_SUFFIXES = (".msh", ".inp", ".vtu", ".vtk", ".med", ".xdmf", ".bdf", ".dat", ".nas",
                   ".unv", ".op4", ".mtx")
 
@@ -24,7 +26,8 @@ def add_parser(subparsers) -> None:
         description="Build the FE model of a structure description (TOML) and print its "
         "lowest natural frequencies (Hz) with mode types.",
     )
-    p.add_argument("structure", help="structure description (TOML), see mvtk.fe.build_model")
+    p.add_argument("structure", help="structure description (TOML, see mvtk.fe.build_model), "
+                   "a study file (its structure) or a Nastran deck (.bdf/.dat/.nas)")
     p.add_argument("-n", "--n-modes", type=int, default=6, help="number of modes (default 6)")
     p.add_argument("--json", action="store_true",
                    help='print {"fn_hz": [...], "mode_type": [...], "n_dof": N} as JSON')
@@ -33,17 +36,23 @@ def add_parser(subparsers) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run ``mvtk modes``; returns the exit code (errors propagate as MvtkError)."""
-    from ..fe._modal import modal_analysis
     from ..fe._structure import build_model, resolve_mesh_file
     from ..study._text import read_toml
 
     path = Path(args.structure)
+    if path.suffix.lower() in _NASTRAN_SUFFIXES:
+        # a Nastran deck is a whole model (properties, materials, SPCs): the structure
+        # TOML `mvtk init` writes around it, with the deck's defaults
+        desc = {"name": f"{path.stem} (Nastran deck)", "structure": {"type": "mesh"},
+                "mesh": {"file": path.name}}
+        return _print_modes(args, build_model(resolve_mesh_file(desc, path.resolve().parent)))
     if path.suffix.lower() in _MESH_SUFFIXES:
         from ..errors import ConfigError
 
         raise ConfigError(
             f"{str(path)!r} is a mesh file, not a structure TOML: a mesh carries no "
-            "materials, sections or supports. Write a structure TOML around it with "
+            "materials, sections or supports (a Nastran deck .bdf/.dat/.nas does, and "
+            "`mvtk modes DECK` takes it as it is). Write a structure TOML around it with "
             f"`mvtk init DIR --structure {path}`, edit what it marks EDIT, then run "
             "`mvtk modes DIR/structure.toml`")
     # UTF-8, UTF-8 with BOM or UTF-16 with BOM; a clear error naming the byte otherwise
@@ -55,7 +64,13 @@ def run(args: argparse.Namespace) -> int:
         desc = read_toml(path, "structure file")
         if not args.json:
             print(f"structure of study {args.structure}: {path}")
-    model = build_model(resolve_mesh_file(desc, path.resolve().parent))
+    return _print_modes(args, build_model(resolve_mesh_file(desc, path.resolve().parent)))
+
+
+def _print_modes(args: argparse.Namespace, model) -> int:
+    """Modal analysis of ``model`` printed as a table (or JSON); exit code 0."""
+    from ..fe._modal import modal_analysis
+
     res = modal_analysis(model, args.n_modes)
     if args.json:
         out = {

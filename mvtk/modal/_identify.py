@@ -226,6 +226,17 @@ MIN_RELATIVE_RESIDUAL = 1e-3
 """:func:`lack_of_fit` counts the residual floor as at least this fraction of ``|H|``
 near the mode (rms): what an FRF estimate or a file's stored digits are good to."""
 
+MIN_MPC_FITTED = 0.9
+"""A reliable mode whose :func:`lack_of_fit` stays above :data:`MAX_LACK_OF_FIT` (after
+:func:`raise_orders`) and whose shape is complex, MPC below this, is not reliable
+("unresolved"): one pole stands for two close modes the record cannot tell apart (a
+curved panel's pair 445.60 / 447.75 Hz, 2.15 Hz apart in 2.2 Hz lines, came out as one
+mode at 446.75 Hz, zeta +20 %, MPC 0.86, ratio 41) or for a distortion (the smart-beam
+scan's 13.26 Hz mode, whose FRFs carry an exponential window the file does not state:
+zeta 8.6 x the truth, MPC 0.81, ratio 129). Either indicator alone marks nothing: real
+peaks leave large ratios with a real shape (a single-response test has no MPC), and
+noise lowers the MPC of well-fitted modes."""
+
 NEIGHBOUR_BANDWIDTHS = 3.0
 """How far from a mode that lacks fit (in its half-power bandwidths ``2 zeta fn``) a pole
 of the higher orders counts as its missing neighbour (:func:`raise_orders`)."""
@@ -476,7 +487,7 @@ def identify(
     own = own_lines(as_frf_matrix(frf)) if np.any(left > MAX_TRUNCATION) else None
     if own is None:
         res, raised = _raised(h, res, orders, **opts)
-        return dataclasses.replace(res, band_reason=band_reason + raised)
+        return _mark_unresolved(dataclasses.replace(res, band_reason=band_reason + raised))
     # a mode still above 1 % at the end of the zero-padded record: on the record's own
     # lines its truncated decay is exactly a pole (only the residue is scaled), so the
     # identification is repeated there, in the same band
@@ -491,8 +502,29 @@ def identify(
             f"{res.fn_hz[k]:.4g} Hz ends the record at {left[k]:.1%} of its amplitude "
             f"(> {MAX_TRUNCATION:.0%}), whose truncation ripple on interpolated lines "
             "biases the damping")
-    return dataclasses.replace(again, band_hz=tuple(float(b) for b in again.diagram.band_hz),
-                               band_reason=band_reason + raised + note)
+    return _mark_unresolved(dataclasses.replace(
+        again, band_hz=tuple(float(b) for b in again.diagram.band_hz),
+        band_reason=band_reason + raised + note))
+
+
+def _mark_unresolved(res):
+    """Mark the modes that both lack fit and have a complex shape (see
+    :data:`MIN_MPC_FITTED`): two close modes in one pole, or a distortion."""
+    lack = lack_of_fit(res)
+    mpc_v = np.asarray(res.mpc, dtype=float)
+    hit = (np.asarray(res.reliable, bool) & (lack > MAX_LACK_OF_FIT)
+           & np.isfinite(mpc_v) & (mpc_v < MIN_MPC_FITTED))
+    if not hit.any():
+        return res
+    reason = list(res.reason)
+    for m in np.flatnonzero(hit):
+        reason[m] = (f"unresolved: the fit leaves {lack[m]:.0f} x the band's median residual "
+                     f"around the mode (> {MAX_LACK_OF_FIT:g}) and the shape is complex (MPC "
+                     f"{mpc_v[m]:.2f} < {MIN_MPC_FITTED:g}): two close modes in one pole, or "
+                     "a distortion no modal model holds (leakage, a window left in); its "
+                     "damping and shape are not determined")
+    return dataclasses.replace(res, reliable=np.asarray(res.reliable, bool) & ~hit,
+                               reason=tuple(reason))
 
 
 def _identify_band(h, orders, *, fn_hz, stab, clus, residuals, refine):

@@ -6,6 +6,7 @@ import importlib.util
 import re
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from study_text import with_absolute_paths
@@ -89,13 +90,23 @@ def test_updating_residuals_weighted_by_identified_std_with_verdicts(out_dir):
     """The targets carry the fn_std_hz of the scan's identified modes (1e-5 .. 1e-4 Hz)
     plus the 0.5 % model-form term; the specimen's residuals (0.1-0.5 %, its unmodelled
     sensor mass, sheet and clamp) are far beyond identification noise and within the
-    model-form term (data/smart_beam/README.md)."""
+    model-form term (data/smart_beam/README.md).
+
+    The scan's mode 1 is not reliable ("unresolved": its FRFs carry an exponential
+    window the UFF file does not state, zeta 8.6 x the truth, a complex shape and a
+    residual far above the band's), so f1 takes no identification std: the model-form
+    term alone."""
     res = _table(out_dir, "updating_residuals").set_index("target")
-    assert list(res["std from"]) == [f"test mode {k}" for k in (1, 2, 3, 4)]
-    assert (res["identification_std_hz"] < 1e-3).all()
-    assert res["std_hz"].to_numpy() == pytest.approx(
-        (res["identification_std_hz"] ** 2 + (0.005 * res["target_hz"]) ** 2) ** 0.5)
-    assert (res["residual_hz"].abs() > res["noise_limit_hz"]).all()
+    modes = _table(out_dir, "modal_modes")
+    assert not modes["reliable"][0] and modes["reason"][0].startswith("unresolved")
+    assert list(res["std from"]) == ["none"] + [f"test mode {k}" for k in (2, 3, 4)]
+    assert np.isnan(res.loc["f1", "identification_std_hz"])
+    assert res.loc["f1", "std_hz"] == pytest.approx(0.005 * res.loc["f1", "target_hz"])
+    ident = res.drop(index="f1")
+    assert (ident["identification_std_hz"] < 1e-3).all()
+    assert ident["std_hz"].to_numpy() == pytest.approx(
+        (ident["identification_std_hz"] ** 2 + (0.005 * ident["target_hz"]) ** 2) ** 0.5)
+    assert (ident["residual_hz"].abs() > ident["noise_limit_hz"]).all()
     assert (res["residual_hz"].abs() <= res["model_form_limit_hz"]).all()
     assert (res["verdict"] == "model-form term").all()
 
