@@ -142,3 +142,84 @@ def write_decay(path, fn_hz, *, zeta=0.01, fs=2048.0, record_s=3.0, amplitude=5.
                  "time [s],accel [m/s^2]\n")
         np.savetxt(fh, np.column_stack([d["time"].values, x]), fmt="%.10g", delimiter=",")
     return path
+
+
+def cylinder_deck(path: Path, radius=0.6, length=0.5, arc_deg=70.0, nx=20, na=24) -> Path:
+    """A cylindrical steel panel as a Nastran deck: CQUAD4, 1.2 mm PSHELL, MAT1, every
+    edge simply supported (SPC1 123)."""
+    arc = np.radians(arc_deg)
+    out, nid, k = ["SOL 103\nCEND\nBEGIN BULK\n"], {}, 1
+    for i in range(nx + 1):
+        for j in range(na + 1):
+            th = -arc / 2 + arc * j / na
+            out.append(f"GRID,{k},,{length * i / nx:.9g},{radius * np.sin(th):.9g},"
+                       f"{radius * np.cos(th):.9g}\n")
+            nid[i, j] = k
+            k += 1
+    e = 1
+    for i in range(nx):
+        for j in range(na):
+            out.append(f"CQUAD4,{e},1,{nid[i, j]},{nid[i + 1, j]},{nid[i + 1, j + 1]},"
+                       f"{nid[i, j + 1]}\n")
+            e += 1
+    out.append("PSHELL,1,7,1.2-3,7\nMAT1,7,2.06+11,,0.29,7850.\n")
+    edge = sorted({nid[i, j] for i in range(nx + 1) for j in range(na + 1)
+                   if i in (0, nx) or j in (0, na)})
+    out += [f"SPC1,1,123,{n}\n" for n in edge]
+    out.append("ENDDATA\n")
+    path.write_text("".join(out))
+    return path
+
+
+def add_noise_and_double_hit(path: Path, rng, *, noise=0.01, double_at_s=None):
+    """1 % white noise on both channels of a roving_hammer CSV; optionally the whole
+    record added again ``double_at_s`` later at half its size (a double hit)."""
+    lines = path.read_text().splitlines()
+    d = np.loadtxt(lines[5:], delimiter=",")
+    if double_at_s is not None:
+        n0 = int(round(double_at_s / (d[1, 0] - d[0, 0])))
+        d[n0:, 1:] += 0.5 * d[:-n0, 1:].copy()
+    d[:, 1:] += noise * d[:, 1:].std(axis=0) * rng.standard_normal(d[:, 1:].shape)
+    path.write_text("\n".join(lines[:5] + [f"{t:.10g},{a:.10g},{b:.10g}" for t, a, b in d])
+                    + "\n")
+
+
+def write_nastran_panel_test(root: Path):
+    """A newcomer's own Nastran deck and roving-hammer test in ``root``: a cylindrical
+    panel (:func:`cylinder_deck`, ``panel.bdf``), 4 x 4 hammer points, the sensor at
+    point 6, 0.5 s records (an exponential window is needed), zeta 0.5 %, 1 % noise,
+    point 6 hit twice (``hit_06b.csv``, a second file), point 11 with a double hit
+    0.25 s after the first. Returns ``(deck, fe_fn_hz, model, hit_files)``; the test
+    geometry is ``root / "test" / "geometry.csv"``."""
+    import warnings
+
+    from mvtk.fe import modal_analysis
+    from mvtk.fe._structure import build_model, resolve_mesh_file
+
+    deck = cylinder_deck(root / "panel.bdf")
+    model = build_model(resolve_mesh_file({"structure": {"type": "mesh"},
+                                           "mesh": {"file": deck.name}}, root))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        modes = modal_analysis(model, 12)
+    pts = []
+    for x in (0.1, 0.2, 0.3, 0.4):
+        for th in np.radians([-25, -8, 8, 25]):
+            at = [x, 0.6 * np.sin(th), 0.6 * np.cos(th)]
+            pts.append(int(np.argmin(np.linalg.norm(model.nodes - at, axis=1))))
+    test = root / "test"
+    test.mkdir()
+    write_fe_test(test, model, modes, pts, pts[5], zeta=0.005, fs=2048.0,
+                     record_s=0.5, f_max_hz=560.0, seed=7)
+    again = root / "again"
+    again.mkdir()
+    second = write_fe_test(again, model, modes, [pts[5]], pts[5], zeta=0.005,
+                              fs=2048.0, record_s=0.5, f_max_hz=560.0, seed=1234)[0]
+    text = second.read_text().replace("node 1, accelerometer at node 1",
+                                      "node 6, accelerometer at node 6")
+    (test / "hit_06b.csv").write_text(text.replace("# node: 1, 1", "# node: 6, 6"))
+    rng = np.random.default_rng(99)
+    for p in sorted(test.glob("hit_*.csv")):
+        add_noise_and_double_hit(p, rng, double_at_s=0.25 if p.name == "hit_11.csv"
+                                  else None)
+    return deck, np.asarray(modes.fn_hz), model, sorted(test.glob("hit_*.csv"))

@@ -108,6 +108,7 @@ def _test_summary(frf, res, note: str, source: str, band) -> dict:
         "df_hz": float(np.median(np.diff(np.asarray(frf["frequency"].values, dtype=float)))),
         "band_hz": [float(band[0]), float(band[1])],
         "frf_type": str(frf.attrs.get("frf_type", "")),
+        "excitation": str(frf.attrs.get("excitation", "")),
         "table": res.to_dataframe().to_dict(orient="list"),
         "orders": [int(res.diagram.orders.min()), int(res.diagram.orders.max())],
         # how identify adapted to the data (higher orders, the record's own lines)

@@ -226,24 +226,33 @@ def _roving_groups(tests: list[dict]) -> list[list[dict]]:
     """The impact files that form roving tests (hammer or sensor moves between sets).
 
     Hammer-test files whose force and response channels carry node numbers are grouped
-    by folder, in the order given; within a folder a (hammer node, sensor node) pair
-    seen again starts a new test (a repeat of the test). Each group of at least two
-    files is one roving test: a roving hammer (the hammer node changes) or a roving
-    sensor. Empty when there is none.
+    by folder, in the order given. Within a folder, when every (hammer node, sensor
+    node) pair occurs the same number of times k >= 2, the test was repeated: the j-th
+    file of each pair belongs to the j-th test. Otherwise the folder is one test, and a
+    pair measured in several files (a point hit again) is averaged over them by
+    :func:`mvtk.modal.frf_matrix`. Each group of at least two files is one roving test:
+    a roving hammer (the hammer node changes) or a roving sensor. Empty when there is
+    none.
     """
+    from collections import Counter
+
     cand = [t for t in tests if t["kind"] == "impact" and "nodes" in t]
     folders: dict = {}
     for t in cand:
         folders.setdefault(Path(t["file"]).resolve().parent, []).append(t)
     groups = []
     for members in folders.values():
-        cur: list[dict] = []
+        times = set(Counter(t["nodes"] for t in members).values())
+        repeats = times.pop() if len(times) == 1 else 1
+        if repeats < 2:
+            groups.append(members)
+            continue
+        seen: Counter = Counter()
+        split: list[list[dict]] = [[] for _ in range(repeats)]
         for t in members:
-            if any(t["nodes"] == u["nodes"] for u in cur):
-                groups.append(cur)
-                cur = []
-            cur.append(t)
-        groups.append(cur)
+            split[seen[t["nodes"]]].append(t)
+            seen[t["nodes"]] += 1
+        groups += split
     return [g for g in groups if len(g) >= 2]
 
 
