@@ -182,16 +182,19 @@ class SparsityPattern:
         flat0 = (np.arange(n_pairs, dtype=itype) * itype(b * b))[:, None, None]
         # the inverse: for every CSR entry, its (pair, a, c) in the pair blocks (each
         # entry is in exactly one pair block), so that the data are one np.take
-        self._gather = np.empty(nnz, dtype=itype)
+        # (entries on a constrained DOF are written to a spare slot past the end, which
+        # is cheaper than compressing the position and value arrays by a mask)
+        gather = np.empty(nnz + 1, dtype=itype)
         for k in np.unique(kinds):
             cols = np.flatnonzero(kinds == k)
             pos = rowbase[:, cols][:, :, None] + colrank[:, cols][:, None, :]
             flat = flat0 + (cols[:, None] * b + cols[None, :]).astype(itype)[None]
             ok = okp[:, cols][:, :, None] & okq[:, cols][:, None, :]
-            if ok.all():
-                self._gather[pos.ravel()] = flat.ravel()
-            else:
-                self._gather[pos[ok]] = flat[ok]
+            if not ok.all():
+                np.copyto(pos, itype(nnz), where=~ok)
+            gather[pos.ravel()] = flat.ravel()
+        # np.take converts its indices to intp: kept as intp, they are converted once
+        self._gather = gather[:nnz].astype(np.intp)
         self._pair_of = pinv.ravel().astype(itype, copy=False)      # (n_el * s * s,)
         self._n_pairs = n_pairs
         self._block = (s, b)
@@ -214,18 +217,17 @@ class SparsityPattern:
         return self._position
 
     def _pair_sums(self, mats, rep):
-        """Node-pair block sums of element matrices (node-graph patterns): one sparse
-        product of the (pair x element-block) incidence with the element blocks of all
-        matrices in ``mats``, shape (n_pairs, n_mats * b * b)."""
+        """Node-pair block sums of element matrices (node-graph patterns): for each
+        matrix in ``mats``, the sparse product of the (pair x element-block) incidence
+        with its element blocks, shape (n_pairs, b * b)."""
         s, b = self._block
         n_el = self.element_shape[0]
         n_u = len(mats[0])
-        # blocks (element or distinct element u, node pair si, sj) x (matrix, a, c)
-        blocks = np.stack([m.reshape(n_u, s, b, s, b).transpose(0, 1, 3, 2, 4)
-                           for m in mats], axis=3).reshape(n_u * s * s, len(mats) * b * b)
-        cross = self._kinds[:, None] != self._kinds[None, :]
-        if np.any(cross) and np.any(
-                blocks.reshape(n_u * s * s, len(mats), b, b)[:, :, cross]):
+        # blocks (element or distinct element u, node pair si, sj) x (a, c)
+        blocks = [m.reshape(n_u, s, b, s, b).transpose(0, 1, 3, 2, 4).reshape(
+            n_u * s * s, b * b) for m in mats]
+        cross = (self._kinds[:, None] != self._kinds[None, :]).ravel()
+        if np.any(cross) and any(np.any(blk[:, cross]) for blk in blocks):
             raise ParameterError(
                 "element matrices couple DOFs of different kinds, which this sparsity "
                 f"pattern leaves out (kinds {self._kinds.tolist()} per node)")
@@ -236,7 +238,7 @@ class SparsityPattern:
         # pair and block), so that every distinct block is read, not copied per element
         inc = sp.csr_matrix((np.ones(len(col)), (self._pair_of, col)),
                             shape=(n_pairs, n_u * s * s))
-        return inc @ blocks
+        return [inc @ blk for blk in blocks]
 
     def assemble_many(self, mats, rep: np.ndarray | None = None) -> list[sp.csr_matrix]:
         """Sum several sets of element matrices (e.g. K and M) into CSR matrices.
@@ -270,15 +272,9 @@ class SparsityPattern:
             raise DimensionError(f"rep must index 0..{len(mats[0]) - 1}")
         out = []
         if self._gather is not None:
-            sums = self._pair_sums(mats, rep).ravel()
-            bb = self._block[1] ** 2
-            # entry j of the block of pair p, matrix k: sums[p * n_mats * bb + k * bb + j]
-            idx = (self._gather // bb).astype(np.intp)
-            idx *= len(mats) * bb
-            idx += self._gather % bb
-            for _ in mats:
-                data = np.take(sums, idx)
-                idx += bb
+            # entry j of the block of pair p: sums[p, j], the CSR entry's _gather = p bb + j
+            for sums in self._pair_sums(mats, rep):
+                data = np.take(sums.ravel(), self._gather)
                 out.append(sp.csr_matrix((data, self.indices, self.indptr),
                                          shape=self.shape))
             return out

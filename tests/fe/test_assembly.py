@@ -182,3 +182,17 @@ def test_flat_plate_pattern_splits_membrane_and_bending():
         B = full.assemble(U)
         assert B.nnz == uns.K.nnz
         assert abs(A - B).max() <= 1e-14 * abs(B).max()
+
+
+def test_model_refuses_a_dof_listed_twice():
+    """FEModel's DOF table: each (node, component) once, components 0..5."""
+    K = sp.identity(3, format="csr")
+    nodes = np.zeros((2, 3))
+    fe.FEModel(K=K, M=K, nodes=nodes, dof_node=np.array([0, 0, 1]),
+               dof_component=np.array([0, 1, 0]))
+    with pytest.raises(DimensionError, match="duplicated DOF"):
+        fe.FEModel(K=K, M=K, nodes=nodes, dof_node=np.array([0, 1, 1]),
+                   dof_component=np.array([2, 0, 0]))
+    with pytest.raises(DimensionError, match="dof_component must be in 0..5"):
+        fe.FEModel(K=K, M=K, nodes=nodes, dof_node=np.array([0, 0, 1]),
+                   dof_component=np.array([0, 6, 0]))
