@@ -797,7 +797,10 @@ def read_columns(
     with open(path, "rb") as fh:
         fd = fh.fileno()
         n_workers = parse_workers()
-        chunk = min(CHUNK_BYTES, max(MIN_CHUNK_BYTES, (size - start) // (4 * n_workers)))
+        # at least 4 chunks per thread, at most CHUNK_BYTES each, and a multiple of the
+        # threads so that the last round does not leave threads idle
+        rounds = max(4, -(-(size - start) // (n_workers * CHUNK_BYTES)))
+        chunk = max(MIN_CHUNK_BYTES, -(-(size - start) // (rounds * n_workers)))
         offsets = _chunk_offsets(fd, start, size, chunk)
         if rows_hint is None:
             sample = os.pread(fd, min(1 << 16, size - start), start)
@@ -806,15 +809,15 @@ def read_columns(
         rows_hint = max(int(rows_hint), 1)
         n_chunks = len(offsets) - 1
         block = np.empty((len(keep), rows_hint), dtype=np.float64)
-        # each worker copies its own chunk into ``block`` once the rows of every chunk
-        # before it are known (the main thread then only submits: no third thread
-        # competing with the two parsers for the cores); a chunk beyond the estimated
-        # rows is kept and copied after the pool, into a grown array
-        state = threading.Condition()
+        # a parsed chunk is copied into ``block`` as soon as the rows of every chunk
+        # before it are known, by the thread that makes them known: a worker never
+        # waits for a slower one (its chunk is parked until then); a chunk beyond the
+        # estimated rows is kept and copied after the pool, into a grown array
+        state = threading.Lock()
         rows = [-1] * n_chunks           # rows of each parsed chunk
         first = [0] * (n_chunks + 1)     # row offset of each chunk, known for k < known
         known = [0]
-        failed = [False]
+        parked: dict[int, list] = {}
         overflow: dict[int, list] = {}
 
         def parse(k: int):
@@ -822,26 +825,25 @@ def read_columns(
             buf = os.pread(fd, hi - lo, lo)
             got = _parse_chunk(buf, opts, n_fields, keep, extra)
             del buf
-            with state:
-                if got is None:
-                    failed[0] = True
-                else:
-                    rows[k] = len(got[0][0]) if keep else 0
-                while known[0] < n_chunks and rows[known[0]] >= 0:
-                    first[known[0] + 1] = first[known[0]] + rows[known[0]]
-                    known[0] += 1
-                state.notify_all()
-                while known[0] <= k and not failed[0]:
-                    state.wait()
-                if failed[0]:
-                    return None
+            if got is None:
+                return None
             columns, nans = got
-            a, b = first[k], first[k + 1]
-            if b > block.shape[1]:
-                overflow[k] = columns
-            else:
-                for j, column in enumerate(columns):
-                    block[j, a:b] = column
+            with state:
+                rows[k] = len(columns[0]) if keep else 0
+                parked[k] = columns
+                ready = []
+                while known[0] < n_chunks and rows[known[0]] >= 0:
+                    j = known[0]
+                    first[j + 1] = first[j] + rows[j]
+                    ready.append((j, parked.pop(j)))
+                    known[0] += 1
+            for j, cols in ready:
+                a, b = first[j], first[j + 1]
+                if b > block.shape[1]:
+                    overflow[j] = cols
+                else:
+                    for i, column in enumerate(cols):
+                        block[i, a:b] = column
             return nans
 
         nan_counts = np.zeros(len(keep), dtype=np.int64)
@@ -854,9 +856,6 @@ def read_columns(
             while pending:
                 nans = pending.pop(0).result()
                 if nans is None:
-                    with state:
-                        failed[0] = True
-                        state.notify_all()
                     for f in pending:
                         f.cancel()
                     return None

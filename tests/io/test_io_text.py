@@ -321,3 +321,31 @@ def test_parallel_parse_with_too_few_rows_estimated(tmp_path, rng, monkeypatch):
                                                 rows_hint=hint)
         assert n_rows == data.shape[0] and not nans.any()
         np.testing.assert_array_equal(block, data[:, [7, 0]].T)
+
+
+def test_parallel_parse_with_a_slow_first_chunk(tmp_path, rng, monkeypatch):
+    """Chunks parsed before an earlier, slower one wait parked, and are copied in file
+    order by the thread that finishes the slow one: the same array as in order."""
+    import threading
+    import time
+
+    import mvtk.io._text as text
+
+    path, data = _big_csv(tmp_path, rng)
+    monkeypatch.setattr(text, "CHUNK_BYTES", 2**20)
+    monkeypatch.setattr(text, "MIN_CHUNK_BYTES", 2**18)
+    monkeypatch.setattr(text, "parse_workers", lambda: 3)
+    real = text._parse_chunk
+    first = threading.Event()
+
+    def slow_first(buf, *args):
+        if not first.is_set():
+            first.set()
+            time.sleep(0.3)   # the other threads parse (and park) the next chunks
+        return real(buf, *args)
+
+    monkeypatch.setattr(text, "_parse_chunk", slow_first)
+    start = path.read_bytes()[:4096].index(b"\n") + 1
+    block, n_rows, nans = text.read_columns(path, start, 9, [1, 8], {"sep": ","})
+    assert n_rows == data.shape[0] and not nans.any()
+    np.testing.assert_array_equal(block, data[:, [0, 7]].T)
