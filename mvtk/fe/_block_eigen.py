@@ -42,13 +42,18 @@ def _m_orthonormalize(W, MW, floor: float = 0.0):
     invariant subspace reached, are dropped, as are directions of M-norm below
     ``floor``). Returns ``(V, MV, R)`` with ``W = V R`` (``R`` upper triangular, or with
     fewer rows than columns when directions are dropped)."""
-    G = W.T @ MW
+    G = _gemm(1.0, W, MW, trans_a=True)
     G = 0.5 * (G + G.T)
+    if not np.all(np.isfinite(G)):
+        raise ConvergenceError(
+            "block Lanczos: the basis is not finite (the solves returned inf or NaN: is "
+            "the shifted matrix singular?)")
     try:
-        R = sla.cholesky(G, lower=False)
+        R = sla.cholesky(G, lower=False, check_finite=False)
         dr = np.abs(np.diag(R))
         if np.min(dr) > max(1e-10 * np.max(dr), floor):
-            Rinv = sla.solve_triangular(R, np.eye(R.shape[0]), lower=False)
+            Rinv = sla.solve_triangular(R, np.eye(R.shape[0]), lower=False,
+                                        check_finite=False)
             return _gemm(1.0, W, Rinv), _gemm(1.0, MW, Rinv), R
     except np.linalg.LinAlgError:
         pass

@@ -188,3 +188,14 @@ def test_block_products_match_numpy(width, trans):
     out = _gemm(-1.0, A, B, trans_a=trans, beta=1.0, c=c)
     np.testing.assert_allclose(out, expected, atol=1e-12)
     np.testing.assert_allclose(c, expected, atol=1e-12)    # overwritten in place
+
+
+def test_block_lanczos_refuses_a_non_finite_basis():
+    """A solve that returns NaN (a singular shifted matrix factorised with a zero pivot)
+    gives a ConvergenceError that says so, not a LAPACK error or NaN eigenvalues."""
+    from mvtk.errors import ConvergenceError
+
+    M = sp.identity(40, format="csr")
+    start = np.random.default_rng(0).standard_normal((40, 2))
+    with pytest.raises(ConvergenceError, match="not finite"):
+        block_lanczos(lambda B: np.full(B.shape, np.nan), M, 3, start, 1e-10, 40)
