@@ -98,14 +98,19 @@ def _cell(text: str) -> str:
 def markdown_table(summary: dict) -> str:
     """Markdown table of a summary written by :func:`main` (one row per benchmark).
 
+    The heading names the run's date, Python, cores and the sparse factorisation
+    backend the benchmarks ran with (:func:`mvtk.fe.sparse_backend`, with versions).
     Columns: benchmark, headline figures (:data:`HEADLINE`, else the first scalar
     figures; ``_s`` seconds, ``_mib`` MiB), the peer, the ratios (peer time / mvtk time:
     > 1 means mvtk is faster, unless the name says otherwise) and the 1-minute load
     average when it ran (the machine is shared). A benchmark that failed shows its
     return code.
     """
+    backends = sorted({str(b["sparse_backend"]) for b in
+                       summary.get("benchmarks", {}).values() if b.get("sparse_backend")})
     head = (f"Benchmarks of {summary.get('created_utc', '?')} (Python "
             f"{summary.get('python', '?')}, {summary.get('cpu_count', '?')} cores; "
+            f"sparse factorisation {' / '.join(backends) or 'not recorded'}; "
             "`make bench`, reports/bench.json)")
     rows = ["| benchmark | figures | peer | ratios | load |", "|---|---|---|---|---|"]
     for name, b in summary.get("benchmarks", {}).items():

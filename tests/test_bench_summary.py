@@ -21,6 +21,7 @@ SUMMARY = {
     "created_utc": "2026-12-01T21:00:00Z", "python": "3.11.7", "cpu_count": 2,
     "benchmarks": {
         "fe": {"returncode": 0, "load_avg_1min_before": 3.7,
+               "sparse_backend": "cholmod (sksparse-minimal 1.0.2, OpenBLAS 0.3.21)",
                "figures": {"n_dof": 49140, "median_total_s": 1.234567, "limit_ratio": 1.4,
                            "fn_hz": [0.43, 1.06], "rounds": 3},
                "peer": "OpenSeesPy ShellMITC4 eigen",
@@ -39,6 +40,8 @@ def test_markdown_table_rows_and_headline_figures():
     md = _summary_module().markdown_table(SUMMARY)
     lines = md.strip().splitlines()
     assert lines[0].startswith("Benchmarks of 2026-12-01T21:00:00Z (Python 3.11.7, 2 cores")
+    # the backend the figures were made with
+    assert "sparse factorisation cholmod (sksparse-minimal 1.0.2, OpenBLAS 0.3.21)" in lines[0]
     assert lines[2] == "| benchmark | figures | peer | ratios | load |"
     rows = {ln.split("|")[1].strip(): ln for ln in lines[4:]}
     assert set(rows) == {"fe", "study", "io", "damping"}
