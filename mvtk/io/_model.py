@@ -175,7 +175,9 @@ def time_axis(n: int, fs: float) -> np.ndarray:
     >>> time_axis(4, 1024.0)       # s
     array([0.        , 0.00097656, 0.00195312, 0.00292969])
     """
-    return np.arange(int(n)) / float(fs)
+    t = np.arange(int(n), dtype=np.float64)   # exact integers up to 2**53
+    t /= float(fs)
+    return t
 
 
 def _per_channel(value, n: int, name: str, default) -> list:

@@ -37,7 +37,10 @@ def _check_time(da: xr.DataArray, tdim: str, label: str, where: str) -> None:
         raise FormatError(
             f"{label}{where}: expected a positive sampling rate, found fs = {fs!r} Hz"
         )
-    expected = np.arange(n) / fs
+    expected = np.arange(n, dtype=np.float64)
+    expected /= fs
+    if np.array_equal(t, expected):
+        return  # the axis every reader makes (time_axis): no tolerance test needed
     err = np.abs(t - expected)
     bad = np.flatnonzero(~(err <= 1e-9 / fs + 1e-12 * np.abs(expected)))
     if bad.size:
@@ -93,15 +96,18 @@ def _check_values(da: xr.DataArray, cdim: str, label: str, where: str) -> None:
     values = np.asarray(da.values)
     if values.dtype.kind not in "fc":
         raise FormatError(f"{label}{where}: expected float samples, got dtype {values.dtype}")
-    finite = np.isfinite(values)
-    if finite.all():
+    # channel by channel; a NaN or an infinity makes the sum of squares |x|^2 non-finite
+    # (BLAS, no temporary: 27 ms against 66 ms for np.isfinite on 16 x 6 M samples),
+    # which an overflow of finite values alone can too: then each value is tested
+    rows = values.reshape(values.shape[0], -1) if values.ndim else values.reshape(1, 1)
+    if all(np.isfinite(np.vdot(row, row)) or np.isfinite(row).all() for row in rows):
         nan_count = np.zeros(values.shape[0], dtype=np.int64)
     elif np.isinf(values).any():
         ch, i = np.argwhere(np.isinf(values))[0][:2]
         name = str(da[cdim].values[ch]) if values.ndim == 2 else int(ch)
         raise FormatError(f"{label}{where}: infinite value in channel {name!r} at sample {i}")
     else:
-        nan_count = (~finite).reshape(values.shape[0], -1).sum(axis=1)
+        nan_count = np.array([np.count_nonzero(np.isnan(row)) for row in rows])
     m_name = "n_missing" + cdim[len("channel") :]
     marked = (
         np.asarray(da[m_name].values)

@@ -349,3 +349,56 @@ def test_parallel_parse_with_a_slow_first_chunk(tmp_path, rng, monkeypatch):
     block, n_rows, nans = text.read_columns(path, start, 9, [1, 8], {"sep": ","})
     assert n_rows == data.shape[0] and not nans.any()
     np.testing.assert_array_equal(block, data[:, [0, 7]].T)
+
+
+def test_parsed_record_in_small_pages_is_the_same_array(tmp_path, rng, monkeypatch):
+    """A large parsed record lives in a private anonymous mapping advised against huge
+    pages (their compaction cost 0.7-1.0 s per 800 MB on first write): the values are
+    the file's, the array writable and its memory freed with it, both when the row
+    estimate holds and when the array grows."""
+    import gc
+    import mmap
+    import weakref
+
+    import mvtk.io._text as text
+
+    path, data = _big_csv(tmp_path, rng)
+    monkeypatch.setattr(text, "CHUNK_BYTES", 2**20)
+    monkeypatch.setattr(text, "SMALL_PAGES_BYTES", 0)
+    start = path.read_bytes()[:4096].index(b"\n") + 1
+    for hint in (None, 10):
+        block, n_rows, _ = text.read_columns(path, start, 9, [1, 8], {"sep": ","},
+                                             rows_hint=hint)
+        np.testing.assert_array_equal(block, data[:, [0, 7]].T)
+        owner = block
+        while isinstance(owner, np.ndarray):
+            owner = owner.base
+        owner = owner.obj if isinstance(owner, memoryview) else owner
+        if hasattr(mmap, "MADV_NOHUGEPAGE"):
+            assert isinstance(owner, mmap.mmap)
+            gone = weakref.ref(owner)
+            del owner
+            block[0, 0] = 1.5                      # writable
+            del block
+            gc.collect()
+            assert gone() is None                  # unmapped with the array
+    monkeypatch.undo()
+    small = text._fresh_array((2, 3))
+    assert small.flags.owndata and small.dtype == np.float64     # numpy's own below
+
+
+def test_validate_exact_axis_and_overflowing_finite_values(rng):
+    """The validator's fast paths: the exact ``arange(n) / fs`` axis, and channels whose
+    sum of squares overflows although every value is finite (then tested one by one)."""
+    import xarray as xr
+
+    import mvtk.io as mio
+
+    big = np.full((2, 50), 1e200)
+    da = mio.time_history(big, 1000.0, ["a", "b"], "N", quantity="force")
+    mio.validate(da)                              # no NaN, no infinity: accepted
+    bad = da.copy(data=big.copy())
+    bad.values[0, 7] = -np.inf
+    with pytest.raises(FormatError, match=r"infinite value in channel 'a' at sample 7"):
+        mio.validate(bad)
+    assert isinstance(da, xr.DataArray)
