@@ -283,6 +283,8 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--skip-opensees", action="store_true")
     ap.add_argument("--skip-large", action="store_true")
+    ap.add_argument("--large-repeats", type=int, default=3,
+                    help="fresh runs of the 199 836-DOF case (the median one is reported)")
     ap.add_argument("--million", action="store_true", help="only the 1 M-DOF case")
     ap.add_argument("--million-n", type=int, default=408, help="408 -> 1 000 000 DOF")
     ap.add_argument("--quick", action="store_true", help="1 round, no 200k case")
@@ -290,6 +292,8 @@ def main() -> None:
                     help="only the imported 200k-DOF curved shell vs the built-in plate")
     ap.add_argument("--child", nargs="+", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.large_repeats < 1:
+        ap.error(f"--large-repeats must be >= 1, got {args.large_repeats}")
     if args.child:
         kind, *rest = args.child
         if kind == "mvtk":
@@ -474,9 +478,17 @@ def main() -> None:
         payload["figures"]["fn_max_rel_diff_vs_opensees"] = agree
         payload["figures"]["fn_max_rel_diff_default_vs_opensees"] = agree_default
     if not args.skip_large:
-        big = _run_child("mvtk", "182", str(args.modes), "0")
-        big["limit_ratio"] = big["eigsh_s"] / own_limit(big, "s")
-        big["limit_ratio_cpu"] = big["eigsh_cpu"] / own_limit(big, "cpu")
+        # fresh processes, as the 49 140-DOF rounds; the median run by its limit ratio
+        # is reported (one run moved between 1.10 and 1.23 on the shared machine)
+        runs = []
+        for _ in range(args.large_repeats):
+            run = _run_child("mvtk", "182", str(args.modes), "0")
+            run["limit_ratio"] = run["eigsh_s"] / own_limit(run, "s")
+            run["limit_ratio_cpu"] = run["eigsh_cpu"] / own_limit(run, "cpu")
+            runs.append(run)
+        per_run = [r["limit_ratio"] for r in runs]
+        big = runs[int(np.argsort(per_run)[len(runs) // 2])]
+        big["limit_ratio_per_run"] = per_run
         big["single_solve_limit_ratio"] = big["eigsh_s"] / (big["factorize_s"]
                                                             + big["solves_2n_s"])
         big["assembly_share_cpu"] = big["assembly_cpu"] / (big["assembly_cpu"]
@@ -487,14 +499,15 @@ def main() -> None:
               f"{100 * big['assembly_share_cpu']:.0f} %); eigen step {big['eigsh_s']:.2f} s "
               f"(cpu {big['eigsh_cpu']:.2f} s) vs 1 factorisation {big['factorize_s']:.2f} s "
               f"+ the {big['n_block_solves']} solves made: {big['limit_ratio']:.2f}x wall, "
-              f"{big['limit_ratio_cpu']:.2f}x CPU (target <= 1.2; vs {2 * args.modes} single "
-              f"solves {big['single_solve_limit_ratio']:.2f}x); peak RSS "
-              f"{big['peak_rss_mib']:.0f} MiB; load {big['load_before']:.1f}")
+              f"{big['limit_ratio_cpu']:.2f}x CPU (target <= 1.2; median of "
+              f"{len(per_run)} runs: {', '.join(f'{x:.2f}' for x in per_run)}; vs "
+              f"{2 * args.modes} single solves {big['single_solve_limit_ratio']:.2f}x); peak "
+              f"RSS {big['peak_rss_mib']:.0f} MiB; load {big['load_before']:.1f}")
         payload["figures"]["large_200k"] = {k: big[k] for k in (
             "n_dof", "assembly_s", "modal_s", "assembly_cpu", "modal_cpu", "eigsh_s",
             "eigsh_cpu", "factorize_s", "factorize_cpu", "solves_2n_s", "solves_2n_cpu",
             "limit_ratio", "limit_ratio_cpu", "single_solve_limit_ratio",
-            "n_block_solves", "assembly_share_cpu", "peak_rss_mib",
+            "limit_ratio_per_run", "n_block_solves", "assembly_share_cpu", "peak_rss_mib",
             "backend", "load_before")}
     write_result("fe", payload)
 
