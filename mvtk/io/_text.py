@@ -895,7 +895,10 @@ def _fresh_array(shape: tuple[int, int]) -> np.ndarray:
     if nbytes < SMALL_PAGES_BYTES or advise is None or os.name != "posix":
         return np.empty(shape, dtype=np.float64)
     mapped = mmap.mmap(-1, nbytes, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
-    mapped.madvise(advise)
+    try:
+        mapped.madvise(advise)
+    except OSError:        # a kernel built without transparent huge pages: no advice needed
+        pass
     return np.frombuffer(mapped, dtype=np.float64).reshape(shape)
 
 
