@@ -694,10 +694,13 @@ def _read_segment(
     else:
         data = arr[y_rows]
     rows = [cols.index(k) for k in xpos]
-    if rows == list(range(rows[0], rows[0] + len(rows))) if rows else False:
-        xs = arr[rows[0] : rows[0] + len(rows)]  # a view (the copy took 60 ms per channel
-    else:                                        # of a 10-minute 10 kHz record)
-        xs = arr[rows] if rows else np.empty((0, data.shape[1]))
+    if not rows:
+        xs = np.empty((0, data.shape[1]))
+    elif rows == list(range(rows[0], rows[0] + len(rows))):
+        # a view: the copy took 60 ms per channel of a 10-minute 10 kHz record
+        xs = arr[rows[0] : rows[0] + len(rows)]
+    else:
+        xs = arr[rows]
     if n_missing is None:
         n_missing = np.isnan(data).sum(axis=1)
     n = data.shape[1]
