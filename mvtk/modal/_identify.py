@@ -887,6 +887,39 @@ def record_lines(h) -> tuple[float | None, float]:
     return n / fs, nfft / n
 
 
+def record_window(h) -> tuple[np.ndarray, float] | None:
+    """Time window ``(w per sample, fs)`` of the records behind impact FRFs, for the
+    line correlation of their noise (:func:`mvtk.modal.refine_poles`), or None when the
+    lines are independent (an unwindowed, unpadded record), the FRFs do not say
+    (``attrs`` ``nperseg``, ``nfft``, ``window``, ``exponential_window_tau_s``,
+    ``pretrigger``) or they are not of an impact test (averaged random or swept
+    excitation decorrelates the lines: the force spectrum varies from record to
+    record)."""
+    from scipy.signal import get_window
+
+    a = h.attrs
+    if a.get("excitation") != "impact":
+        return None
+    try:
+        n, nfft = int(a["nperseg"]), int(a["nfft"])
+        tau = a.get("exponential_window_tau_s", a.get("exp_window_tau_s"))
+        tau = None if tau is None else float(tau)
+        name = a.get("window", "boxcar")
+        w = get_window("boxcar" if name in (None, "None") else name, n, fftbins=True)
+        df = float(a.get("df_hz") or np.median(np.diff(h["frequency"].values)))
+        pre = int(a.get("pretrigger", 0) or 0)
+    except (KeyError, TypeError, ValueError):
+        return None
+    if n <= 0 or nfft < n or not (df > 0):
+        return None
+    fs = df * nfft
+    if tau is not None and tau > 0:
+        w = w * np.exp(-np.clip(np.arange(n) - pre, 0, None) / (tau * fs))
+    elif nfft == n and np.all(w == w[0]):
+        return None
+    return w, fs
+
+
 def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=True,
                      refine=True):
     """Refinement, LSFD on the selected poles and everything the result table needs."""
@@ -903,15 +936,20 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     refined = np.zeros(nm, bool)
     noise = None
     if nm:
+        # impact records: the window (exponential, zero-padding) correlates the noise
+        # of neighbouring lines, which the poles' covariance then accounts for
+        window = record_window(h)
         ref = refine_poles(Hf[:, :, finite], f[finite], pole, kind, residuals=residuals,
-                           max_nfev=50 if refine else 0)
+                           max_nfev=50 if refine else 0, record_window=window)
         if refine:
             pole, refined = ref.pole.copy(), ref.refined.copy()
         cov, noise = ref.covariance, ref.noise_std
     # zero-padded lines interpolate the record's nperseg / 2 independent ones: the fit
-    # counts each piece of information ``pad`` times (variances ``pad`` times too small)
+    # counts each piece of information ``pad`` times (variances ``pad`` times too small),
+    # unless the line correlation of the record's window was used
     _, pad = record_lines(h)
-    cov = cov * pad
+    if not nm or window is None:
+        cov = cov * pad
     fn = np.abs(pole) / (2 * np.pi)
     zeta = -pole.real / np.where(np.abs(pole) > 0, np.abs(pole), 1)
     windows, half = _windows(f, fn, zeta)
