@@ -955,7 +955,7 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
     windows, half = _windows(f, fn, zeta)
     fit, (r_with, r_without, _), coef_var = lsfd_with_misfit(
         Hf, f, pole, kind, [w & finite for w in windows], residuals=residuals,
-        coef_variance=True)
+        coef_variance=True, record_window=window if nm else None)
     # support: misfit without / with the mode within its window
     with np.errstate(divide="ignore", invalid="ignore"):
         support = np.where(r_with > 0, r_without / np.where(r_with > 0, r_with, 1.0), np.inf)
@@ -976,7 +976,8 @@ def modes_from_poles(h, diagram, sel: SelectedPoles, clus, stab, *, residuals=Tr
         rot, real = _rotate_real(cplx)
         real = real / np.maximum(np.abs(real).max(axis=1, keepdims=True), 1e-300)
         norm = "unit_max"
-    psi_std = _shape_std(coef_var, part, noise, no) * np.sqrt(pad)
+    psi_std = _shape_std(coef_var, part, noise, no) * np.sqrt(
+        pad if not nm or window is None else 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         gain = np.linalg.norm(cplx, axis=1) / np.linalg.norm(phi, axis=1) if nm else 1.0
     # the window's damping leaves every pole: sigma_true = sigma_id - 1 / tau

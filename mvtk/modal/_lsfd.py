@@ -9,6 +9,7 @@ import scipy.linalg
 
 from ..errors import ParameterError
 from ._frf import FRF_TYPES
+from ._line_noise import correlated_gram
 
 __all__ = ["lsfd", "LsfdFit", "synthesise", "local_misfit"]
 
@@ -235,20 +236,27 @@ def _fit(H, f_hz, poles, frf_type, residuals):
 
 
 def lsfd_with_misfit(H, f_hz, poles, frf_type, windows, *, residuals=True,
-                     coef_variance=False):
+                     coef_variance=False, record_window=None):
     """:func:`lsfd` and :func:`local_misfit` from one factorisation of the basis.
 
     With ``coef_variance`` a third item: the diagonal of ``(B^T B)^-1`` of the real
     basis (one entry per real coefficient, residue real/imaginary parts first): the
     variance of each fitted coefficient per unit noise variance of the real and
-    imaginary parts of an FRF line.
+    imaginary parts of an FRF line; with ``record_window`` (``(w, fs)``, see
+    :mod:`mvtk.modal._line_noise`) that of the lines' correlated noise,
+    ``diag((B^T B)^-1 B^T S B (B^T B)^-1)``.
     """
     fit, A, rhs, keep, qr, colnorm = _fit(H, f_hz, poles, frf_type, residuals)
     out = (fit, _misfits(qr, A, rhs, keep, windows))
     if coef_variance:
         try:
             Rinv = scipy.linalg.solve_triangular(qr[0], np.eye(qr[0].shape[0]))
-            d = np.sum(Rinv**2, axis=1) / colnorm**2
+            if record_window is None:
+                d = np.sum(Rinv**2, axis=1) / colnorm**2
+            else:
+                # (B^T B)^-1 B^T = R^-1 Q^T: the sandwich is R^-1 (Q^T S Q) R^-T
+                G = correlated_gram(A @ Rinv, np.asarray(f_hz, float)[keep], record_window)
+                d = np.einsum("ij,jk,ik->i", Rinv, G, Rinv) / colnorm**2
         except (np.linalg.LinAlgError, ValueError):
             d = np.full(A.shape[1], np.nan)
         out = out + (d,)

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
 from ._frf import FRF_TYPES
+from ._line_noise import correlate_lines
 from ._lm import levenberg_marquardt
 
-__all__ = ["refine_poles", "PoleRefinement", "pole_std", "line_correlation"]
+__all__ = ["refine_poles", "PoleRefinement", "pole_std"]
 
 WINDOW_BANDWIDTHS = 2.0
 """Lines within ``fn +- max(WINDOW_LINES lines, WINDOW_BANDWIDTHS x 2 zeta fn)`` of any
@@ -379,121 +379,41 @@ def _refine_group(H, f, lam0, fixed, lines, frf_type, residuals, variance, max_n
                 # (zero-padded lines interpolate them), so 1 / stride does not apply
                 pf = prob if stride == 1 else _Problem(
                     H[:, :, all_lines], f[all_lines], power, nm, residuals, weight, fixed)
-                cv = _correlated_covariance(pf.jacobian(theta), pf.residual(theta),
-                                            pf.solve(theta)[4], f[all_lines],
-                                            record_window, nm)
+                r = pf.residual(theta)
+                cv, dof = _correlated_covariance(pf.jacobian(theta), r, pf.solve(theta)[4],
+                                                 f[all_lines], record_window, nm)
         except np.linalg.LinAlgError:
             cv = np.full((2 * nm, 2 * nm), np.nan)
     covs = np.stack([cv[2 * m:2 * m + 2, 2 * m:2 * m + 2] for m in range(nm)])
-    # noise std per FRF (complex, per line) from the final residual, in FRF units
+    # noise std per FRF (complex, per line) from the final residual, in FRF units (with
+    # a record window: every line, over the residual's expectation of correlated noise)
     rr = r.reshape(no * ni, -1)
     noise = np.sqrt(np.sum(rr**2, axis=1) / max(dof, 1)).reshape(no, ni) * weight * np.sqrt(2)
     return lam, ok, covs, noise, lines, msg
-
-
-def line_correlation(f_hz, window, fs: float) -> np.ndarray:
-    """Correlation of white noise between FRF lines of a windowed record.
-
-    ``C_kl = sum_t w_t^2 exp(-2 pi i (f_k - f_l) t) / sum_t w_t^2`` with ``t = n / fs``
-    over the window's samples: the identity for an unwindowed record on its own
-    lines, correlated neighbours for an exponential (impact) window or zero-padding.
-
-    Parameters
-    ----------
-    f_hz : numpy.ndarray
-        Frequency lines (Hz).
-    window : numpy.ndarray
-        Window value per sample of the record (ones for none).
-    fs : float
-        Sampling rate (Hz).
-
-    Returns
-    -------
-    numpy.ndarray, shape (len(f_hz), len(f_hz)), complex
-        Hermitian, ones on the diagonal.
-
-    Examples
-    --------
-    The lines of an unwindowed record are independent; an exponential window with
-    tau = T / 3 correlates neighbours (``|C| = 1 / |1 + i pi tau / T|`` for a long
-    record):
-
-    >>> f = np.arange(3) * 10.0                    # lines of a 0.1 s record
-    >>> np.round(np.abs(line_correlation(f, np.ones(1000), 1e4)[0]), 6)
-    array([1., 0., 0.])
-    >>> w = np.exp(-np.arange(1000) / 1e4 / (0.1 / 3))
-    >>> np.round(np.abs(line_correlation(f, w, 1e4)[0, 1]), 2)
-    np.float64(0.69)
-    """
-    f = np.asarray(f_hz, dtype=float)
-    w2, fs = _window_power(window, fs)
-    diff = f[:, None] - f[None, :]
-    # depends on f_k - f_l only: evaluated once per distinct difference
-    uniq, inverse = np.unique(np.round(diff * (w2.size / fs), 9), return_inverse=True)
-    return _correlation_at(uniq * (fs / w2.size), w2, fs)[inverse.reshape(diff.shape)]
-
-
-def _window_power(window, fs):
-    w2 = np.asarray(window, dtype=float) ** 2
-    if w2.ndim != 1 or w2.size == 0 or not np.all(np.isfinite(w2)) or w2.sum() <= 0:
-        raise ParameterError("record window: a non-empty 1-D array of finite values, "
-                             "not all zero")
-    if not (np.isfinite(fs) and fs > 0):
-        raise ParameterError(f"record window: sampling rate must be > 0 Hz, got {fs!r}")
-    return w2, float(fs)
-
-
-def _correlation_at(d_hz, w2, fs):
-    """``sum_t w2_t exp(-2 pi i d t) / sum w2`` for each frequency offset ``d_hz``."""
-    d_hz = np.asarray(d_hz, dtype=float)
-    step = np.min(np.abs(d_hz[d_hz != 0])) if np.any(d_hz != 0) else 0.0
-    period = fs / step if step else 0.0
-    k = d_hz / step if step else np.zeros_like(d_hz)
-    if step and abs(period - round(period)) < 1e-6 * period and np.allclose(
-            k, np.round(k), atol=1e-6):
-        # offsets on a grid of fs / M: one FFT of the window power folded on M points
-        M = int(round(period))
-        folded = np.zeros(M)
-        np.add.at(folded, np.arange(w2.size) % M, w2)
-        G = np.fft.fft(folded)
-        return G[np.round(k).astype(np.int64) % M] / w2.sum()
-    t = np.arange(w2.size) / fs
-    g = np.empty(d_hz.size, complex)
-    for lo in range(0, d_hz.size, 256):                    # bounded memory
-        g[lo:lo + 256] = np.exp(-2j * np.pi * d_hz[lo:lo + 256, None] * t[None, :]) @ w2
-    return g / w2.sum()
 
 
 def _correlated_covariance(J, r, Q, f_lines, record_window, nm):
     """Covariance of the poles (``2 nm`` parameters) when the noise of the lines has
     the correlation of ``record_window`` (see :func:`refine_poles`, Notes). ``J`` and
     ``r``: Jacobian and residual with the rows of each FRF as ``[real parts; imaginary
-    parts]`` of its lines; ``Q``: orthonormal basis of the local model of one FRF."""
-    w2, fs = _window_power(*record_window)
+    parts]`` of its lines; ``Q``: orthonormal basis of the local model of one FRF.
+    Returns the covariance and the expected residual sum of squares of one FRF per unit
+    noise variance (its degrees of freedom, ``2 L - n_coef`` for independent lines)."""
     L = f_lines.size
-    Jf = J.reshape(-1, 2 * L, J.shape[1])
-    # complex form of [Re; Im] vectors: for proper noise of line correlation C, the
-    # real form's quadratic forms x^T S y are Re(xc^H C yc)
-    Jc = np.moveaxis(Jf[:, :L] + 1j * Jf[:, L:], 1, 0).reshape(L, -1)   # (L, n_frf p)
-    Qc = Q[:L] + 1j * Q[L:]
-    X = np.hstack([Jc, Qc])
-    d = np.diff(f_lines)
-    if L > 1 and np.allclose(d, d[0], rtol=1e-6):
-        # equally spaced lines: C is Toeplitz, applied by FFT without forming it
-        from scipy.linalg import matmul_toeplitz
-
-        g = _correlation_at(np.arange(L) * d[0], w2, fs)
-        CX = matmul_toeplitz((g, g.conj()), X)
-    else:
-        CX = line_correlation(f_lines, np.sqrt(w2), fs) @ X
     p = J.shape[1]
-    CJ = CX[:, :Jc.shape[1]].reshape(L, -1, p)
-    meat = np.real(np.einsum("kfp,kfq->pq", Jc.reshape(L, -1, p).conj(), CJ))
-    trace = float(np.real(np.sum(Qc.conj() * CX[:, Jc.shape[1]:])))
-    dof = Jf.shape[0] * (2 * L - trace) - 2 * nm
-    s2 = float(np.sum(r**2)) / max(dof, 1.0)
+    Jf = J.reshape(-1, 2 * L, p)
+    n_frf = Jf.shape[0]
+    # complex form of the [Re; Im] rows; every FRF's columns and Q's correlated at once
+    Jc = np.moveaxis(Jf[:, :L] + 1j * Jf[:, L:], 0, 1).reshape(L, n_frf * p)
+    Qc = Q[:L] + 1j * Q[L:]
+    CX = correlate_lines(np.hstack([Jc, Qc]), f_lines, record_window)
+    # sum over FRFs of Re(Jc_f^H C Jc_f); tr(Q^T S Q) = Re tr(Qc^H C Qc)
+    meat = np.real(np.einsum("kfp,kfq->pq", Jc.reshape(L, n_frf, p).conj(),
+                             CX[:, :n_frf * p].reshape(L, n_frf, p)))
+    trace = float(np.real(np.sum(Qc.conj() * CX[:, n_frf * p:])))
+    s2 = float(np.sum(r**2)) / max(n_frf * (2 * L - trace) - 2 * nm, 1.0)
     Ji = np.linalg.inv(J.T @ J)
-    return Ji @ meat @ Ji * s2
+    return Ji @ meat @ Ji * s2, 2 * L - trace
 
 def pole_std(pole, covariance):
     """Standard deviations ``(fn_std_hz, zeta_std)`` of poles from the covariance of
