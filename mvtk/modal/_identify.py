@@ -889,8 +889,8 @@ def record_lines(h) -> tuple[float | None, float]:
 
 def record_window(h) -> tuple[np.ndarray, float] | None:
     """Time window ``(w per sample, fs)`` of the records behind impact FRFs, for the
-    line correlation of their noise (:func:`mvtk.modal.refine_poles`), or None when the
-    lines are independent (an unwindowed, unpadded record), the FRFs do not say
+    line correlation of their noise (``refine_poles(record_window=...)``), or None when
+    the lines are independent (an unwindowed, unpadded record), the FRFs do not say
     (``attrs`` ``nperseg``, ``nfft``, ``window``, ``exponential_window_tau_s``,
     ``pretrigger``) or they are not of an impact test (averaged random or swept
     excitation decorrelates the lines: the force spectrum varies from record to
